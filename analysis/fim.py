@@ -1,0 +1,161 @@
+"""Fisher information, CRLB, PEB and GDOP for range (time-of-flight) positioning (SPEC §3).
+
+Range model (paper §IV, eq. 4): r_j = ‖p − a_j‖ + n_j, n_j ~ N(0, σ_j²) independent. Then
+
+    J(p) = Σ_j u_j u_jᵀ / σ_j²,      u_j = (p − a_j)/‖p − a_j‖,
+
+CRLB = J⁻¹ and PEB(p) = √tr J(p)⁻¹ in metres. The paper (§IV, eq. 7) calls tr J⁻¹ itself
+the PEB (m²); :func:`crlb_trace` returns that quantity.
+
+Shapes: ``anchors`` is (M, 3) or a batch of layouts (..., M, 3); ``positions`` is (P, 3).
+Results carry the batch axes first: (..., P) or (..., P, 3, 3). ``sigma`` (metres) is a
+scalar, a per-anchor (M,) array, a per-pair (P, M) array, or anything broadcasting to
+(..., P, M); σ = inf means "no information from that anchor".
+
+A singular J (fewer than three independent directions, e.g. the node in the plane of
+coplanar anchors) gives PEB = +inf, never an exception, NaN or warning. J is declared
+singular when its smallest eigenvalue (estimated as det J / Σ principal 2×2 minors) is
+below ``SINGULAR_RTOL`` · tr J.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: relative eigenvalue threshold below which J counts as singular (PEB ≥ 1e5× typical)
+SINGULAR_RTOL = 1e-10
+
+#: pairs (positions × anchors × layouts) processed per chunk, to bound memory
+_CHUNK_ELEMENTS = 1 << 21
+
+
+def _as_inputs(anchors, positions):
+    a = np.asarray(anchors, dtype=float)
+    p = np.asarray(positions, dtype=float)
+    if a.ndim < 2 or a.shape[-1] != 3:
+        raise ValueError(f"anchors: expected shape (M, 3) or (..., M, 3), got {a.shape}")
+    if p.ndim == 1 and p.shape[0] == 3:
+        p = p[None, :]
+    if p.ndim != 2 or p.shape[-1] != 3:
+        raise ValueError(f"positions: expected shape (P, 3), got {p.shape}")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(p))):
+        raise ValueError("anchors/positions: must be finite (no NaN or inf)")
+    return a, p
+
+
+def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> np.ndarray:
+    """1/σ² broadcast to (..., P, M); σ must be > 0 (inf allowed: weight 0)."""
+    s = np.asarray(sigma, dtype=float)
+    if np.any(np.isnan(s)) or np.any(s <= 0):
+        raise ValueError("sigma: range standard deviations must be > 0 m (inf allowed), no NaN")
+    try:
+        s = np.broadcast_to(s, (*batch, P, M))
+    except ValueError:
+        raise ValueError(
+            f"sigma: shape {s.shape} does not broadcast to (..., P, M) = {(*batch, P, M)}; "
+            "use a scalar, (M,), (P, M) or (..., P, M)"
+        ) from None
+    return 1.0 / (s * s)
+
+
+def _components(a: np.ndarray, p: np.ndarray, w: np.ndarray):
+    """Six unique FIM entries (xx, yy, zz, xy, xz, yz), each (..., P).
+
+    u u_jᵀ/σ² = diff diffᵀ · w/d², which avoids the square root and three divisions.
+    """
+    diff = p[:, None, :] - a[..., None, :, :]  # (..., P, M, 3)
+    d2 = np.einsum("...k,...k->...", diff, diff)
+    # A node exactly on an anchor has no defined direction: it carries no information.
+    s = np.divide(w, d2, out=np.zeros_like(d2), where=d2 > 0)
+    dx, dy, dz = diff[..., 0], diff[..., 1], diff[..., 2]
+    sx, sy = s * dx, s * dy
+    return (
+        np.einsum("...m,...m->...", sx, dx),
+        np.einsum("...m,...m->...", sy, dy),
+        np.einsum("...m,...m->...", s * dz, dz),
+        np.einsum("...m,...m->...", sx, dy),
+        np.einsum("...m,...m->...", sx, dz),
+        np.einsum("...m,...m->...", sy, dz),
+    )
+
+
+def _trace_inverse(xx, yy, zz, xy, xz, yz) -> np.ndarray:
+    """tr J⁻¹ by the adjugate formula, +inf where J is singular."""
+    m_x = yy * zz - yz * yz  # principal 2×2 minors = diagonal of adj J
+    m_y = xx * zz - xz * xz
+    m_z = xx * yy - xy * xy
+    minors = m_x + m_y + m_z
+    det = xx * m_x - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz)
+    trace = xx + yy + zz
+    ok = (minors > 0) & (det > SINGULAR_RTOL * trace * minors)
+    out = np.full(det.shape, np.inf)
+    np.divide(minors, det, out=out, where=ok)
+    return out
+
+
+def _chunked(a, p, sigma, fn):
+    """Apply ``fn(a, p_chunk, w_chunk)`` over chunks of positions; concatenate on axis -1."""
+    batch, M, P = a.shape[:-2], a.shape[-2], p.shape[0]
+    w = _inverse_variance(sigma, batch, P, M)
+    step = max(1, _CHUNK_ELEMENTS // max(1, M * int(np.prod(batch, dtype=np.int64))))
+    if step >= P:
+        return fn(a, p, w)
+    parts = [fn(a, p[i : i + step], w[..., i : i + step, :]) for i in range(0, P, step)]
+    return np.concatenate(parts, axis=len(batch))
+
+
+def fim(anchors, positions, sigma=0.04) -> np.ndarray:
+    """Fisher information matrix J(p) for range measurements, (..., P, 3, 3) in 1/m².
+
+    J(p) = Σ_j u_j u_jᵀ / σ_j² (SPEC §3; paper eq. 6).
+    """
+    a, p = _as_inputs(anchors, positions)
+
+    def one(a, p, w):
+        xx, yy, zz, xy, xz, yz = _components(a, p, w)
+        return np.stack(
+            [np.stack([xx, xy, xz], -1), np.stack([xy, yy, yz], -1), np.stack([xz, yz, zz], -1)],
+            -2,
+        )
+
+    return _chunked(a, p, sigma, one)
+
+
+def crlb(anchors, positions, sigma=0.04) -> np.ndarray:
+    """Position CRLB J(p)⁻¹, (..., P, 3, 3) in m²; all entries +inf where J is singular."""
+    a, p = _as_inputs(anchors, positions)
+
+    def one(a, p, w):
+        xx, yy, zz, xy, xz, yz = _components(a, p, w)
+        adj = np.stack(
+            [
+                np.stack([yy * zz - yz * yz, xz * yz - xy * zz, xy * yz - xz * yy], -1),
+                np.stack([xz * yz - xy * zz, xx * zz - xz * xz, xy * xz - xx * yz], -1),
+                np.stack([xy * yz - xz * yy, xy * xz - xx * yz, xx * yy - xy * xy], -1),
+            ],
+            -2,
+        )
+        det = xx * adj[..., 0, 0] + xy * adj[..., 1, 0] + xz * adj[..., 2, 0]
+        singular = ~np.isfinite(_trace_inverse(xx, yy, zz, xy, xz, yz))
+        det = np.where(singular, 1.0, det)
+        out = adj / det[..., None, None]
+        out[singular] = np.inf
+        return out
+
+    return _chunked(a, p, sigma, one)
+
+
+def crlb_trace(anchors, positions, sigma=0.04) -> np.ndarray:
+    """tr J(p)⁻¹, (..., P) in m² — the paper's "PEB" (§IV, eq. 7); +inf where singular."""
+    a, p = _as_inputs(anchors, positions)
+    return _chunked(a, p, sigma, lambda a, p, w: _trace_inverse(*_components(a, p, w)))
+
+
+def peb(anchors, positions, sigma=0.04) -> np.ndarray:
+    """Position error bound √tr J(p)⁻¹, (..., P) in metres; +inf where J is singular."""
+    return np.sqrt(crlb_trace(anchors, positions, sigma))
+
+
+def gdop(anchors, positions) -> np.ndarray:
+    """Geometric dilution of precision √tr (HᵀH)⁻¹, (..., P), dimensionless (PEB at σ = 1)."""
+    return peb(anchors, positions, sigma=1.0)

@@ -1,0 +1,21 @@
+"""Anchor directivity: the cardioid speaker aimed at the room centroid (SPEC §2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def cardioid(cos_theta: np.ndarray) -> np.ndarray:
+    """Cardioid amplitude gain g(θ) = ½(1 + cos θ), from cos θ (any shape)."""
+    return 0.5 * (1.0 + np.asarray(cos_theta, dtype=float))
+
+
+def aim_vectors(anchors: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """(..., M, 3) unit vectors from each anchor (..., M, 3) toward ``target`` (3,).
+
+    An anchor exactly at the target gets the +z axis (any direction is as good).
+    """
+    d = np.asarray(target, dtype=float) - np.asarray(anchors, dtype=float)
+    n = np.linalg.norm(d, axis=-1, keepdims=True)
+    safe = n > 0
+    return np.where(safe, d / np.where(safe, n, 1.0), np.array([0.0, 0.0, 1.0]))

@@ -1,0 +1,72 @@
+import numpy as np
+import pytest
+
+import analysis
+from analysis.noise import PhysicalRangeNoise, direct_amplitude
+from simulation import Room
+
+
+def test_physical_sigma_matches_explicit_sum_and_snr_reference():
+    room = Room.techtile()
+    model = PhysicalRangeNoise(room)
+    anchors = room.corners_layout()
+    nodes = room.grid()
+    s = model.sigma(anchors, nodes)
+    assert s.shape == (270, 4) and np.all(s > 0) and np.all(np.isfinite(s))
+    # brute force: σ_τ² = σ_w² / (A² Σ (2π f)² / 2) with σ_w² = (A_ref²/2)/SNR
+    c = room.speed_of_sound
+    rx, ch = model.receiver, model.chirp
+    t = rx.window_times
+    A = direct_amplitude(room, anchors, nodes)
+    ref = model.reference_amplitude(anchors)
+    for p in (0, 77, 269):
+        for j in range(4):
+            tau = np.linalg.norm(nodes[p] - anchors[j]) / c
+            f = ch.frequency(t - tau)
+            var_tau = (ref[j] ** 2 / 2 / 1e3) / (A[p, j] ** 2 * np.sum((2 * np.pi * f) ** 2) / 2)
+            assert s[p, j] == pytest.approx(c * np.sqrt(var_tau), rel=1e-9)
+    # at the reference node the SNR is 30 dB by construction: closest node gets the
+    # smallest σ of that anchor
+    closest = np.argmin(np.linalg.norm(nodes[:, None] - anchors[None], axis=-1), axis=0)
+    np.testing.assert_array_equal(np.argmin(s, axis=0), closest)
+
+
+def test_physical_sigma_grows_with_distance_and_off_axis():
+    room = Room.techtile()
+    model = PhysicalRangeNoise(room)
+    a = np.array([[4.0, 0.03, 1.2]])  # south wall, aimed along +y
+    near, far = np.array([[4.0, 1.0, 1.2]]), np.array([[4.0, 3.9, 1.2]])
+    assert model.sigma(a, far)[0, 0] > 3 * model.sigma(a, near)[0, 0]
+    assert PhysicalRangeNoise(room, snr_db=10).sigma(a, far)[0, 0] == pytest.approx(
+        np.sqrt(100) * model.sigma(a, far)[0, 0]
+    )
+    # usable as sigma in the PEB
+    nodes = room.grid()
+    pb = analysis.peb(room.corners_layout(), nodes, model.sigma(room.corners_layout(), nodes))
+    assert np.all(np.isfinite(pb)) and pb.max() < 0.04
+
+
+def test_error_stats_and_ecdf():
+    e = np.array([0.1, 0.2, 0.3, 0.4, np.inf])
+    st = analysis.error_stats(e)
+    assert st.n == 4 and st.n_invalid == 1
+    assert st.mean == pytest.approx(0.25)
+    assert st.std == pytest.approx(np.std([0.1, 0.2, 0.3, 0.4]))
+    assert st.rms == pytest.approx(np.sqrt(np.mean(np.array([0.1, 0.2, 0.3, 0.4]) ** 2)))
+    assert st.to_dict()["p95"] == pytest.approx(np.percentile([0.1, 0.2, 0.3, 0.4], 95))
+    x, F = analysis.ecdf([0.3, 0.1, 0.2])
+    np.testing.assert_allclose(x, [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(F, [1 / 3, 2 / 3, 1])
+
+
+def test_dop_and_axis_errors():
+    rng = np.random.default_rng(0)
+    R, P, M = 2000, 3, 4
+    range_err = rng.normal(0, 0.05, size=(R, P, M))
+    pos = rng.normal(0, 0.1, size=(R, P, 3))
+    e = np.linalg.norm(pos, axis=-1)
+    d = analysis.dop(e, range_err)
+    np.testing.assert_allclose(d, np.sqrt(3) * 0.1 / 0.05, rtol=0.05)
+    truth = np.zeros((P, 3))
+    np.testing.assert_allclose(analysis.axis_errors(pos, truth), np.abs(pos))
+    np.testing.assert_allclose(analysis.euclidean_errors(pos, truth), e)
