@@ -8,7 +8,10 @@ import importlib
 import sys
 
 #: sub-command modules of this package, in the order ``--help`` lists them
-COMMANDS = ("bounds",)
+COMMANDS = (
+    "plan",
+    "bounds",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,139 @@
+"""Cost functions of a layout for the swarm (SPEC §4, paper §V-A).
+
+A cost maps anchors (M, 3) and a numpy ``Generator`` (the evaluation's own noise stream)
+to a float, lower is better; +inf marks a layout that cannot be scored. The paper's cost
+is the variance of the Euclidean position error over the 270 grid nodes from the full
+simulation.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from analysis.fim import peb
+from simulation.room import Room
+
+#: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost
+SIMULATED_STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
+    "variance": lambda e: float(np.var(e)),
+    "mean": lambda e: float(np.mean(e)),
+    "p95": lambda e: float(np.percentile(e, 95)),
+    "rms": lambda e: float(np.sqrt(np.mean(e * e))),
+}
+
+COST_NAMES = (*SIMULATED_STATISTICS, "peb")
+
+
+@dataclass(frozen=True)
+class SimulatedCost:
+    """A statistic of the simulated Euclidean errors: "variance" (paper), "mean", "p95", "rms".
+
+    Each call simulates ``realizations`` noisy realizations of the full chirp pipeline
+    (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
+    drawn from the given generator.
+    """
+
+    room: Room = field(default_factory=Room.techtile)
+    statistic: str = "variance"
+    realizations: int = 1
+    nodes: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.statistic not in SIMULATED_STATISTICS:
+            raise ValueError(
+                f"statistic: unknown {self.statistic!r}; allowed: {list(SIMULATED_STATISTICS)}"
+            )
+        if int(self.realizations) != self.realizations or self.realizations < 1:
+            raise ValueError(f"realizations: must be an integer >= 1, got {self.realizations}")
+
+    def __call__(self, anchors: np.ndarray, rng: np.random.Generator) -> float:
+        from simulation.evaluation import evaluate_layout
+
+        ev = evaluate_layout(
+            self.room,
+            anchors,
+            realizations=int(self.realizations),
+            seed=int(rng.integers(2**63)),
+            nodes=self.nodes,
+        )
+        e = np.asarray(ev.errors, dtype=float)
+        if not np.all(np.isfinite(e)):
+            return math.inf
+        return SIMULATED_STATISTICS[self.statistic](e)
+
+
+@dataclass(frozen=True)
+class PEBCost:
+    """Mean PEB = mean over nodes of √tr J⁻¹ (metres) for a constant range σ; bound-driven.
+
+    Deterministic: the generator is ignored. A singular node makes the cost +inf.
+    """
+
+    room: Room = field(default_factory=Room.techtile)
+    sigma: float = 0.04
+    nodes: np.ndarray | None = None
+
+    def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
+        nodes = self.room.grid() if self.nodes is None else self.nodes
+        return float(np.mean(peb(anchors, nodes, self.sigma)))
+
+
+@dataclass(frozen=True)
+class CallableCost:
+    """Wraps a user function ``f(anchors) -> float`` or ``f(anchors, rng) -> float``."""
+
+    fn: Callable
+    name: str = "callable"
+
+    def __call__(self, anchors: np.ndarray, rng: np.random.Generator) -> float:
+        if _takes_rng(self.fn):
+            return float(self.fn(anchors, rng))
+        return float(self.fn(anchors))
+
+
+def _takes_rng(fn: Callable) -> bool:
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+    return "rng" in params or len(params) >= 2
+
+
+def make_cost(
+    cost: str | Callable, room: Room, *, realizations: int = 1, nodes=None, sigma: float = 0.04
+) -> Callable[[np.ndarray, np.random.Generator], float]:
+    """Turn a cost name or callable into a ``cost(anchors, rng) -> float`` object.
+
+    Names: "variance" (paper default), "mean", "p95", "rms" (simulated Euclidean errors
+    with ``realizations`` noise realizations per evaluation) and "peb" (mean PEB with
+    constant ``sigma``). Objects that already take ``(anchors, rng)`` pass through.
+    """
+    if isinstance(cost, SimulatedCost | PEBCost | CallableCost):
+        return cost
+    if isinstance(cost, str):
+        if cost == "peb":
+            return PEBCost(room, sigma=sigma, nodes=nodes)
+        if cost in SIMULATED_STATISTICS:
+            return SimulatedCost(room, cost, realizations=realizations, nodes=nodes)
+        raise ValueError(f"cost: unknown name {cost!r}; allowed: {list(COST_NAMES)} or a callable")
+    if callable(cost):
+        return CallableCost(cost, getattr(cost, "__name__", "callable"))
+    raise ValueError(f"cost: expected a name in {list(COST_NAMES)} or a callable, got {cost!r}")
+
+
+def cost_name(cost) -> str:
+    """A label for reports: the statistic's name, "peb", or the callable's name."""
+    if isinstance(cost, str):
+        return cost
+    if isinstance(cost, SimulatedCost):
+        return cost.statistic
+    if isinstance(cost, PEBCost):
+        return "peb"
+    if isinstance(cost, CallableCost):
+        return cost.name
+    return getattr(cost, "__name__", type(cost).__name__)

@@ -1,0 +1,309 @@
+"""The whole chain (SPEC §4): analytic seeds → PSO on the simulated cost → validation.
+
+``seed_then_pso(room, M=8)`` screens layouts with the bound (A- and D-optimal convex
+relaxations, their gradient refinements, the best of many random layouts), puts them into
+the swarm beside random particles, runs the swarm on the full chirp simulation, and
+validates the winner with many noise realizations.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from analysis.fim import peb
+from placement.costs import cost_name, make_cost
+from placement.pso import PSOOptions, PSOResult, pso
+from placement.surfaces import random_layout
+from simulation.room import Room
+
+logger = logging.getLogger(__name__)
+
+#: random layouts screened by mean PEB for the "auto" seeds, and how many are kept
+RANDOM_SCREEN, RANDOM_KEEP = 512, 2
+
+
+@dataclass
+class SeedLayout:
+    """A seed layout: where it came from, its anchors, mean PEB (m, σ = 0.04 m) and the
+    cost it scored in the swarm's first iteration."""
+
+    name: str
+    anchors: np.ndarray
+    mean_peb: float
+    cost: float = math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "anchors": np.asarray(self.anchors).tolist(),
+            "mean_peb": self.mean_peb,
+            "cost": self.cost,
+        }
+
+
+@dataclass
+class PlacementResult:
+    """Result of :func:`seed_then_pso`.
+
+    anchors (M, 3) the best layout; cost its (noisy) PSO cost; history the best cost per
+    iteration (non-increasing); seeds the analytic seed layouts with their costs;
+    validation the statistics of the best layout over ``validate_realizations`` noise
+    realizations (σ, mean, P95, RMS of the Euclidean error in m; mean PEB in m with
+    σ_r = 0.04 m, PEB = √tr J⁻¹); timings in seconds.
+    """
+
+    room: Room
+    anchors: np.ndarray
+    cost: float
+    cost_name: str
+    history: list[float]
+    best_anchors_history: list[np.ndarray]
+    nfev: int
+    nit: int
+    message: str
+    success: bool
+    seeds: list[SeedLayout]
+    validation: dict[str, Any]
+    timings: dict[str, float]
+    settings: dict[str, Any]
+    pso: PSOResult | None = field(default=None, repr=False)
+
+    @property
+    def x(self) -> np.ndarray:
+        return self.anchors.ravel()
+
+    @property
+    def fun(self) -> float:
+        return self.cost
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "room": self.room.to_dict(),
+            "anchors": self.anchors.tolist(),
+            "cost": self.cost,
+            "cost_name": self.cost_name,
+            "history": list(self.history),
+            "best_anchors_history": [np.asarray(a).tolist() for a in self.best_anchors_history],
+            "nfev": self.nfev,
+            "nit": self.nit,
+            "message": self.message,
+            "success": self.success,
+            "seeds": [s.to_dict() for s in self.seeds],
+            "validation": self.validation,
+            "timings": self.timings,
+            "settings": self.settings,
+            "costs": None if self.pso is None else np.asarray(self.pso.costs).tolist(),
+        }
+
+    def to_json(self, **kw) -> str:
+        """Strict JSON (non-finite numbers become null)."""
+        return json.dumps(_finite(self.to_dict()), **kw)
+
+
+def _finite(obj):
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, np.generic):
+        return _finite(obj.item())
+    return obj
+
+
+def analytic_seeds(
+    room: Room, M: int, *, sigma: float = 0.04, nodes=None, seed: int | None = None
+) -> list[SeedLayout]:
+    """The "auto" seeds: A- and D-optimal relaxations, their PEB refinements, and the
+    best random layouts by mean PEB. A seed whose solver fails is logged and skipped."""
+    from placement.refine import refine_peb
+    from placement.relaxation import relax_select
+
+    nodes = room.grid() if nodes is None else nodes
+    out: list[SeedLayout] = []
+
+    def add(name, anchors):
+        anchors = np.asarray(anchors, dtype=float)
+        if any(np.allclose(anchors, s.anchors) for s in out):
+            return
+        value = float(np.mean(peb(anchors, nodes, sigma)))
+        if math.isfinite(value):
+            out.append(SeedLayout(name, anchors, value))
+
+    for criterion in ("A", "D"):
+        try:
+            sel = relax_select(room, M, criterion=criterion, sigma=sigma, nodes=nodes, seed=seed)
+            add(f"relax-{criterion}", sel.anchors)
+            add(
+                f"relax-{criterion}+refine", refine_peb(room, sel.anchors, sigma=sigma, nodes=nodes)
+            )
+        except Exception as exc:  # noqa: BLE001 - a failed seed leaves the others
+            logger.warning("seed relax-%s failed: %s", criterion, exc)
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
+    layouts = np.stack([random_layout(room, M, rng) for _ in range(RANDOM_SCREEN)])
+    scores = np.mean(peb(layouts, nodes, sigma), axis=-1)
+    for k, i in enumerate(np.argsort(scores)[:RANDOM_KEEP]):
+        add(f"random-best-{k + 1}", layouts[i])
+    return out
+
+
+def validate_layout(
+    room: Room, anchors, realizations: int, seed: int, sigma: float = 0.04, nodes=None
+) -> dict[str, Any]:
+    """σ, mean, P95, RMS of the simulated Euclidean error over ``realizations``, the mean
+    PEB (m, √tr J⁻¹ at constant ``sigma``), per-node RMSE and DOP, and the errors (R, P)."""
+    from simulation.evaluation import evaluate_layout
+
+    nodes = room.grid() if nodes is None else nodes
+    ev = evaluate_layout(room, anchors, realizations=realizations, seed=seed, nodes=nodes)
+    e = np.asarray(ev.errors)
+    return {
+        "realizations": int(realizations),
+        "seed": int(seed),
+        "std": float(np.std(e)),
+        "mean": float(np.mean(e)),
+        "p95": float(np.percentile(e, 95)),
+        "rms": float(np.sqrt(np.mean(e * e))),
+        "mean_peb": float(np.mean(peb(anchors, nodes, sigma))),
+        "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
+        "per_node": {"rmse": np.asarray(ev.rmse).tolist(), "dop": np.asarray(ev.dop).tolist()},
+        "errors": np.round(e, 6).tolist(),
+    }
+
+
+def seed_then_pso(
+    room: Room | None = None,
+    M: int = 8,
+    *,
+    particles: int = 15,
+    iterations: int = 40,
+    cost="variance",
+    realizations: int = 1,
+    seeds="auto",
+    executor: Executor | None = None,
+    seed: int | None = None,
+    progress: bool = True,
+    callback=None,
+    checkpoint=None,
+    validate_realizations: int = 100,
+    options: PSOOptions | None = None,
+    sigma: float = 0.04,
+    nodes=None,
+) -> PlacementResult:
+    """Plan M anchors: analytic seeds → PSO on ``cost`` → validation (SPEC §4).
+
+    cost : "variance" (paper), "mean", "p95", "rms" of the simulated Euclidean error with
+        ``realizations`` noise realizations per evaluation; "peb" (mean PEB); or a callable
+        ``f(anchors)`` / ``f(anchors, rng)``.
+    seeds : "auto" (A-/D-optimal relaxations, their refinements, best random layouts),
+        None for an unseeded swarm, or an array of seed layouts (S, M, 3).
+    executor : a ``concurrent.futures.Executor`` (``ProcessPoolExecutor``, or a Dask
+        ``Client.get_executor()``) for the particle evaluations.
+    seed : makes the whole run reproducible (same result serially or in parallel).
+    checkpoint : a file for the PSO state after every iteration; rerunning with the same
+        arguments resumes from it.
+    validate_realizations : noise realizations used to validate the best layout (0: skip).
+    options : further swarm settings; ``particles`` and ``iterations`` override its fields.
+    """
+    room = Room.techtile() if room is None else room
+    if int(M) != M or M < 4:
+        raise ValueError(f"M: need an integer number of anchors >= 4 for 3D positioning, got {M}")
+    if int(validate_realizations) != validate_realizations or validate_realizations < 0:
+        raise ValueError(
+            f"validate_realizations: must be an integer >= 0, got {validate_realizations}"
+        )
+    base = options or PSOOptions()
+    options = PSOOptions(
+        **{**base.__dict__, "particles": int(particles), "iterations": int(iterations)}
+    )
+    entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
+    cost_fn = make_cost(cost, room, realizations=realizations, nodes=nodes, sigma=sigma)
+    timings: dict[str, float] = {}
+
+    t0 = time.perf_counter()
+    if isinstance(seeds, str):
+        if seeds != "auto":
+            raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
+        seed_layouts = analytic_seeds(room, M, sigma=sigma, nodes=nodes, seed=entropy)
+    elif seeds is None:
+        seed_layouts = []
+    else:
+        arr = np.asarray(seeds, dtype=float).reshape(-1, M, 3)
+        seed_layouts = [
+            SeedLayout(
+                f"user-{i + 1}",
+                a,
+                float(np.mean(peb(a, room.grid() if nodes is None else nodes, sigma))),
+            )
+            for i, a in enumerate(arr)
+        ]
+    # Seeds take at most half of the swarm: the random half keeps exploring.
+    seed_layouts = seed_layouts[: max(0, options.particles // 2)]
+    timings["seeding"] = time.perf_counter() - t0
+
+    t1 = time.perf_counter()
+    initial = np.stack([s.anchors for s in seed_layouts]) if seed_layouts else None
+    res = pso(
+        cost_fn,
+        room,
+        M,
+        initial=initial,
+        options=options,
+        executor=executor,
+        seed=entropy,
+        progress=progress,
+        callback=callback,
+        checkpoint=checkpoint,
+        cost_label=cost_name(cost),
+    )
+    timings["pso"] = time.perf_counter() - t1
+    for i, s in enumerate(seed_layouts):
+        s.cost = float(res.costs[0][i])
+
+    t2 = time.perf_counter()
+    validation: dict[str, Any] = {}
+    if validate_realizations > 0 and res.success:
+        vseed = int(np.random.SeedSequence(entropy, spawn_key=(4,)).generate_state(1)[0])
+        validation = validate_layout(
+            room, res.anchors, int(validate_realizations), vseed, sigma=sigma, nodes=nodes
+        )
+    timings["validation"] = time.perf_counter() - t2
+    timings["total"] = time.perf_counter() - t0
+
+    return PlacementResult(
+        room=room,
+        anchors=res.anchors,
+        cost=res.cost,
+        cost_name=cost_name(cost),
+        history=res.history,
+        best_anchors_history=res.best_anchors_history,
+        nfev=res.nfev,
+        nit=res.nit,
+        message=res.message,
+        success=res.success,
+        seeds=seed_layouts,
+        validation=validation,
+        timings=timings,
+        settings={
+            "M": int(M),
+            "particles": options.particles,
+            "iterations": options.iterations,
+            "cost": cost_name(cost),
+            "realizations": int(realizations),
+            "seeds": "auto" if isinstance(seeds, str) else ("none" if seeds is None else "user"),
+            "seed": entropy,
+            "validate_realizations": int(validate_realizations),
+            "sigma": sigma,
+            "options": dict(options.__dict__),
+        },
+        pso=res,
+    )
