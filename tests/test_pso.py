@@ -156,3 +156,13 @@ def test_bad_options(kwargs, field):
 def test_bad_cost_name():
     with pytest.raises(ValueError, match="cost"):
         make_cost("median", ROOM)
+
+
+def test_serial_equals_dask():
+    from dask import distributed
+
+    serial = pso(noisy_peb, ROOM, 4, options=FAST, seed=5)
+    with distributed.Client(processes=False, n_workers=2, dashboard_address=None) as client:
+        on_dask = pso(noisy_peb, ROOM, 4, options=FAST, seed=5, executor=client.get_executor())
+    np.testing.assert_array_equal(serial.anchors, on_dask.anchors)
+    assert serial.history == on_dask.history
