@@ -3,6 +3,9 @@
 The top layer: imports :mod:`analysis` and :mod:`simulation`, never the reverse.
 """
 
+from placement.exhaustive import ExhaustiveResult, exhaustive_search
+from placement.refine import RefineResult, refine_peb
+from placement.relaxation import Selection, relax_select
 from placement.surfaces import (
     MountingSurface,
     aim,
@@ -18,15 +21,21 @@ from placement.surfaces import (
 )
 
 __all__ = [
+    "ExhaustiveResult",
     "MountingSurface",
+    "RefineResult",
+    "Selection",
     "aim",
     "area_counts",
     "candidate_grid",
+    "exhaustive_search",
     "from_uv",
     "mounting_surfaces",
     "on_surfaces",
     "project",
     "random_layout",
+    "refine_peb",
+    "relax_select",
     "surface_index",
     "to_uv",
 ]
