@@ -1,0 +1,325 @@
+"""Figures render headless to the requested pixel size and show what they claim."""
+
+import struct
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import analysis
+from analysis import figures as F
+from simulation import Room
+
+ROOM = Room.techtile()
+NODES = ROOM.grid()
+CORNERS = ROOM.corners_layout()
+OTHER = np.array([[1.0, 0.03, 2.0], [6.5, 3.97, 0.8], [3.0, 2.0, 2.37], [5.5, 1.2, 2.37]])
+
+
+def png_size(path) -> tuple[int, int]:
+    data = path.read_bytes()[:24]
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    return struct.unpack(">II", data[16:24])
+
+
+def render(fig, tmp_path, name="f.png"):
+    path = F.save(fig, tmp_path / name)
+    fig.canvas.draw()  # 3D scatter offsets are projected at draw time
+    return png_size(path)
+
+
+def by_gid(ax, gid):
+    return [c for c in ax.collections if c.get_gid() == gid]
+
+
+def colorbar_of(fig):
+    cbs = [a for a in fig.axes if a.get_gid() == "colorbar"]
+    assert len(cbs) == 1
+    return cbs[0]
+
+
+def data_axes(fig):
+    return [a for a in fig.axes if a.get_gid() != "colorbar" and a.get_visible()]
+
+
+def test_peb_map_size_panels_anchors_and_colorbar_range(tmp_path):
+    fig = F.peb_map(
+        ROOM, OTHER, heights=[0.5, 1.2], y_cuts=[2.0], x_cuts=[4.0], figsize=(8, 5), dpi=50
+    )
+    assert render(fig, tmp_path) == (400, 250)
+    axs = data_axes(fig)
+    assert len(axs) == 4
+    lo, hi = np.inf, -np.inf
+    for ax in axs:
+        (anchors,) = by_gid(ax, "anchors")
+        assert len(anchors.get_offsets()) == len(OTHER)
+        img = ax.images[0].get_array()
+        lo, hi = min(lo, img.min()), max(hi, img.max())
+    norm = axs[0].images[0].norm
+    assert norm.vmin == pytest.approx(lo) and norm.vmax == pytest.approx(hi)
+    cb = colorbar_of(fig)
+    assert cb.get_ylabel() == "PEB (m)"
+    assert cb.get_ylim() == pytest.approx((lo, hi))
+    # the first panel is z = 0.5: a cell value is the PEB at that cell centre
+    u, v, vals = F.peb_plane(ROOM, OTHER, "z", 0.5)
+    assert axs[0].images[0].get_array()[3, 7] == pytest.approx(vals[7, 3])
+    ref = analysis.peb(OTHER, np.array([[u[7], v[3], 0.5]]))[0]
+    assert vals[7, 3] == pytest.approx(ref)
+    # the y cut shows x horizontally and z vertically, anchors projected
+    ycut = axs[3]  # order: heights, x cuts, y cuts
+    assert ycut.get_xlabel() == "x (m)" and ycut.get_ylabel() == "z (m)"
+    assert np.allclose(by_gid(ycut, "anchors")[0].get_offsets(), OTHER[:, [0, 2]])
+
+
+def test_peb_map_singular_plane_is_masked_and_excluded_from_the_scale(tmp_path):
+    ceiling = np.array([[1.0, 1.0, 2.37], [7.0, 1.0, 2.37], [4.0, 3.5, 2.37], [2.0, 3.0, 2.37]])
+    fig = F.peb_map(ROOM, ceiling, heights=[2.37, 1.2], figsize=(6, 4), dpi=40)
+    assert render(fig, tmp_path) == (240, 160)
+    top, mid = data_axes(fig)
+    assert np.all(top.images[0].get_array().mask)  # coplanar anchors: no z information
+    finite = mid.images[0].get_array()
+    assert not np.any(finite.mask)
+    assert top.images[0].norm.vmax == pytest.approx(finite.max())
+    assert "singular" in fig.get_suptitle()
+
+
+def test_peb_map_log_scale_for_wide_ranges_and_bad_arguments():
+    flat = np.array([[1.0, 0.03, 2.3], [7.0, 0.03, 2.3], [4.0, 0.03, 2.0], [4.0, 3.97, 2.3]])
+    fig = F.peb_map(ROOM, flat, heights=[2.3], dpi=30)
+    norm = data_axes(fig)[0].images[0].norm
+    assert type(norm).__name__ == "LogNorm" and norm.vmax / norm.vmin > 10
+    fig = F.peb_map(ROOM, flat, heights=[2.3], vmax=1.0, scale="linear", dpi=30)
+    assert data_axes(fig)[0].images[0].norm.vmax == 1.0
+    with pytest.raises(ValueError, match="value"):
+        F.peb_map(ROOM, CORNERS, heights=[3.0])
+    with pytest.raises(ValueError, match="scale"):
+        F.peb_map(ROOM, CORNERS, scale="cubic")
+    with pytest.raises(ValueError, match="anchors"):
+        F.peb_map(ROOM, CORNERS[:, :2])
+
+
+def test_scatter3d_nodes_anchors_aim_and_colorbar(tmp_path):
+    values = analysis.peb(OTHER, NODES)
+    values[5] = np.inf
+    fig = F.scatter3d(ROOM, NODES, values, OTHER, figsize=(5, 4), dpi=60)
+    assert render(fig, tmp_path) == (300, 240)
+    (ax,) = data_axes(fig)
+    assert len(by_gid(ax, "nodes")[0].get_offsets()) == len(NODES) - 1
+    assert len(by_gid(ax, "nodes-invalid")[0].get_offsets()) == 1
+    assert len(by_gid(ax, "anchors")[0].get_offsets()) == len(OTHER)
+    assert len(by_gid(ax, "aim")[0].get_segments()) == 3 * len(OTHER)  # shaft + 2 heads
+    finite = values[np.isfinite(values)]
+    assert colorbar_of(fig).get_ylim() == pytest.approx((finite.min(), finite.max()))
+    assert colorbar_of(fig).get_ylabel() == "PEB (m)"
+    fig = F.scatter3d(ROOM, NODES, values, label="RMSE (m)", vmin=0.0, vmax=0.1, dpi=30)
+    cb = colorbar_of(fig)
+    assert cb.get_ylabel() == "RMSE (m)" and cb.get_ylim() == pytest.approx((0.0, 0.1))
+    assert not by_gid(data_axes(fig)[0], "anchors")
+    with pytest.raises(ValueError, match="values"):
+        F.scatter3d(ROOM, NODES, values[:10])
+
+
+def test_error_cdfs_one_line_per_layout_per_panel(tmp_path):
+    rng = np.random.default_rng(1)
+    e = {"corners": rng.gamma(2.0, 0.5, (6, 270)), "optimized": rng.gamma(2.0, 0.3, (6, 270))}
+    e["corners"][0, :27] = np.nan  # failed fixes: 27 of 1620
+    ax_err = {k: rng.normal(0, 0.4, (6, 270, 3)) for k in e}
+    fig = F.error_cdfs(e, ax_err, figsize=(8, 6), dpi=50)
+    assert render(fig, tmp_path) == (400, 300)
+    axs = data_axes(fig)
+    assert len(axs) == 4
+    for ax in axs:
+        lines = [ln for ln in ax.lines if str(ln.get_gid()).startswith("cdf:")]
+        assert sorted(ln.get_gid() for ln in lines) == ["cdf:corners", "cdf:optimized"]
+    (euc,) = [ln for ln in axs[0].lines if ln.get_gid() == "cdf:corners"]
+    assert euc.get_ydata()[-1] == pytest.approx(1 - 27 / 1620)  # failures keep F < 1
+    x = np.sort(e["optimized"].ravel())
+    (opt,) = [ln for ln in axs[0].lines if ln.get_gid() == "cdf:optimized"]
+    assert opt.get_xdata()[-1] == x[-1] and opt.get_ydata()[-1] == 1.0
+    p95 = np.percentile(e["optimized"], 95)
+    assert f"P95 {p95:.3g} m" in opt.get_label()
+    colors = F.layout_colors(["corners", "optimized"])
+    assert euc.get_color() == colors["corners"]
+    # Euclidean only: one panel
+    fig = F.error_cdfs({"a": e["optimized"]}, dpi=30)
+    assert len(data_axes(fig)) == 1
+
+
+def test_error_cdfs_are_reduced_for_large_samples():
+    e = np.random.default_rng(2).gamma(2.0, 0.5, 100_000)
+    fig = F.error_cdfs({"big": e}, dpi=30)
+    (ln,) = [ln for ln in data_axes(fig)[0].lines if ln.get_gid() == "cdf:big"]
+    x, f = ln.get_xdata(), ln.get_ydata()
+    assert len(x) <= 2000 and x[-1] == e.max() and f[-1] == 1.0
+    # the kept points lie on the exact ECDF
+    assert np.allclose(f, np.searchsorted(np.sort(e), x, side="right") / e.size)
+
+
+def test_bound_gap_cdfs_peb_and_rmse_lines_per_layout(tmp_path):
+    peb = {"a": analysis.peb(CORNERS, NODES), "b": analysis.peb(OTHER, NODES)}
+    rmse = {"a": 4 * peb["a"], "b": 2 * peb["b"]}
+    fig = F.bound_gap_cdfs(peb, rmse, figsize=(6, 4), dpi=50)
+    assert render(fig, tmp_path) == (300, 200)
+    (ax,) = data_axes(fig)
+    gids = sorted(str(ln.get_gid()) for ln in ax.lines if ":" in str(ln.get_gid()))
+    assert gids == ["peb:a", "peb:b", "rmse:a", "rmse:b"]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("median RMSE/PEB 4" in t for t in labels)
+    assert any("median RMSE/PEB 2" in t for t in labels)
+    (ra,) = [ln for ln in ax.lines if ln.get_gid() == "rmse:a"]
+    (pa,) = [ln for ln in ax.lines if ln.get_gid() == "peb:a"]
+    assert ra.get_color() == pa.get_color() == F.layout_colors(["a", "b"])["a"]
+    assert pa.get_linestyle() == "--"
+
+
+def test_dop_difference_layers_symmetric_scale(tmp_path):
+    rng = np.random.default_rng(3)
+    a, b = 2.5 + rng.normal(0, 0.3, 270), 1.7 + rng.normal(0, 0.3, 270)
+    b[10] = np.inf
+    fig = F.dop_difference(
+        ROOM, NODES, a, b, anchors_a=CORNERS, anchors_b=OTHER, figsize=(9, 6), dpi=40
+    )
+    assert render(fig, tmp_path) == (360, 240)
+    axs = data_axes(fig)
+    assert len(axs) == 5  # one panel per node height of the 9 × 6 × 5 grid
+    d = a - b
+    lim = np.max(np.abs(d[np.isfinite(d)]))
+    assert colorbar_of(fig).get_ylim() == pytest.approx((-lim, lim))
+    # the first layer (z = 0.05 m) shows the nodes with z index 0, x along columns
+    mesh = [c for c in axs[0].collections if c.get_gid() == "dop"][0]
+    layer = mesh.get_array().reshape(6, 9)
+    grid = NODES.reshape(9, 6, 5, 3)
+    assert np.allclose(layer, (a - b).reshape(9, 6, 5)[:, :, 0].T)
+    assert np.allclose(grid[:, :, 0, 2], 0.05)
+    assert [len(c.get_offsets()) for c in by_gid(axs[0], "anchors")] == [4, 4]
+    ma, mb = np.mean(a), np.mean(b[np.isfinite(b)])
+    assert f"initial {ma:.3g} → optimized {mb:.3g}" in fig.get_suptitle()
+
+
+def test_dop_difference_scatter_for_irregular_nodes(tmp_path):
+    nodes = np.random.default_rng(4).uniform([0.1] * 3, [7.9, 3.9, 2.3], (50, 3))
+    fig = F.dop_difference(ROOM, nodes, np.full(50, 2.0), np.linspace(1, 3, 50), dpi=40)
+    (ax,) = data_axes(fig)
+    assert ax.name == "3d"
+    assert colorbar_of(fig).get_ylim() == pytest.approx((-1.0, 1.0))
+    with pytest.raises(ValueError, match="layers"):
+        F.dop_difference(ROOM, nodes, np.ones(50), np.ones(50), kind="layers")
+
+
+def test_layout_views_one_panel_per_layout(tmp_path):
+    layouts = {
+        "M=4": CORNERS,
+        "M=6": np.vstack([CORNERS, [[4.0, 0.03, 1.2], [4.0, 3.97, 1.2]]]),
+        "pso": OTHER,
+    }
+    fig = F.layout_views(ROOM, layouts, figsize=(9, 3), dpi=50)
+    assert render(fig, tmp_path) == (450, 150)
+    axs = data_axes(fig)
+    assert len(axs) == 3
+    colors = F.layout_colors(list(layouts))
+    for ax, (name, a) in zip(axs, layouts.items(), strict=True):
+        (coll,) = by_gid(ax, "anchors")
+        assert len(coll.get_offsets()) == len(a)
+        assert np.allclose(coll.get_facecolor()[0][:3], _rgb(colors[name]))
+        assert f"M = {len(a)}" in ax.get_title() or f"M={len(a)}" in ax.get_title()
+    with pytest.raises(ValueError):
+        F.layout_views(ROOM, {})
+
+
+def _rgb(hex_color):
+    h = hex_color.lstrip("#")
+    return [int(h[i : i + 2], 16) / 255 for i in (0, 2, 4)]
+
+
+def test_pso_evolution_panels_and_shared_peb_scale(tmp_path):
+    T = 12
+    history = np.linspace(2.0, 0.5, T)
+    bah = np.array([CORNERS + (OTHER - CORNERS) * t / (T - 1) for t in range(T)])
+    fig = F.pso_evolution(ROOM, history, bah, iterations=[1, 6, 12], figsize=(9, 5), dpi=40)
+    assert render(fig, tmp_path) == (360, 200)
+    axs = data_axes(fig)
+    assert len(axs) == 4 and sum(a.name == "3d" for a in axs) == 3
+    (hist_line,) = [ln for ln in axs[0].lines if ln.get_gid() == "history"]
+    assert np.allclose(hist_line.get_ydata(), history)
+    assert np.allclose(hist_line.get_xdata(), np.arange(1, T + 1))
+    vals = np.concatenate([analysis.peb(bah[t - 1], NODES) for t in (1, 6, 12)])
+    assert colorbar_of(fig).get_ylim() == pytest.approx((vals.min(), vals.max()))
+    for ax in axs[1:]:
+        assert len(by_gid(ax, "anchors")[0].get_offsets()) == 4
+    with pytest.raises(ValueError, match="iterations"):
+        F.pso_evolution(ROOM, history, bah, iterations=[0, 13])
+    fig = F.pso_history(history, cost_name="variance", unit="m²", marks=[1, 12], dpi=30)
+    assert data_axes(fig)[0].get_ylabel() == "best variance (m²)"
+
+
+def test_layout_colors_stable_distinct():
+    names = [f"layout {i}" for i in range(10)]
+    c1 = F.layout_colors(names)
+    assert len(set(c1.values())) == 10
+    assert F.layout_colors(names) == c1
+    # a layout keeps its colour when drawn alone
+    alone = F.layout_colors(["layout 0"])
+    assert alone["layout 0"] == F.layout_colors(["layout 0", "optimized"])["layout 0"]
+
+
+def test_figure_size_argument_checked():
+    with pytest.raises(ValueError, match="figsize"):
+        F.new_figure((0, 3))
+    with pytest.raises(ValueError, match="dpi"):
+        F.new_figure((3, 3), dpi=-1)
+
+
+def test_no_pyplot_and_lazy_matplotlib():
+    code = (
+        "import sys, analysis, analysis.report;"
+        "assert 'matplotlib' not in sys.modules, 'analysis imports matplotlib';"
+        "from analysis import figures as F; from simulation import Room;"
+        "r = Room.techtile(); F.png_bytes(F.peb_map(r, r.corners_layout(), dpi=20));"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_dop_difference_clips_heavy_tails_unless_told():
+    a = np.full(270, 2.0)
+    b = np.full(270, 2.0) - np.linspace(-1, 1, 270)
+    b[0] = -500.0  # one extreme node
+    fig = F.dop_difference(ROOM, NODES, a, b, dpi=30)
+    d = np.abs(a - b)
+    p95 = np.percentile(d, 95)
+    assert colorbar_of(fig).get_ylim() == pytest.approx((-p95, p95))
+    assert "clipped" in fig.get_suptitle()
+    fig = F.dop_difference(ROOM, NODES, a, b, vlim=1000.0, dpi=30)
+    assert colorbar_of(fig).get_ylim() == pytest.approx((-1000.0, 1000.0))
+
+
+def test_scatter3d_panels_share_one_scale(tmp_path):
+    values = {"corners": analysis.peb(CORNERS, NODES), "optimized": analysis.peb(OTHER, NODES)}
+    anchors = {"corners": CORNERS, "optimized": OTHER}
+    fig = F.scatter3d_panels(ROOM, NODES, values, anchors, figsize=(8, 3), dpi=50)
+    assert render(fig, tmp_path) == (400, 150)
+    axs = data_axes(fig)
+    assert len(axs) == 2
+    allv = np.concatenate(list(values.values()))
+    assert colorbar_of(fig).get_ylim() == pytest.approx((allv.min(), allv.max()))
+    colors = F.layout_colors(list(values))
+    for ax, name in zip(axs, values, strict=True):
+        (coll,) = by_gid(ax, "anchors")
+        assert len(coll.get_offsets()) == 4
+        assert np.allclose(coll.get_facecolor()[0][:3], _rgb(colors[name]))
+        assert ax.get_title().startswith(f"{name}: mean {values[name].mean():.3g}")
+
+
+def test_dop_difference_with_infinite_dop_draws_grey_without_warnings():
+    a, b = np.full(270, 2.0), np.full(270, 1.5)
+    a[:10] = b[:10] = np.inf
+    fig = F.dop_difference(ROOM, NODES, a, b, dpi=30)
+    assert colorbar_of(fig).get_ylim() == pytest.approx((-0.5, 0.5))
+    masked = sum(
+        int(np.sum(c.get_array().mask))
+        for ax in data_axes(fig)
+        for c in ax.collections
+        if c.get_gid() == "dop"
+    )
+    assert masked == 10

@@ -1,0 +1,257 @@
+"""The HTML report: self-contained, valid, and showing the numbers of its inputs."""
+
+import base64
+import json
+import re
+from html.parser import HTMLParser
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import analysis
+from analysis import report as rp
+from placement.cli import main
+from simulation import Room
+
+ROOM = Room.techtile()
+NODES = ROOM.grid()
+OPT = np.array([[0.6, 0.03, 1.3], [6.1, 0.03, 0.9], [1.2, 3.97, 1.6], [5.7, 3.97, 1.5]])
+VOID = {"meta", "img", "br", "hr", "input", "link", "col", "source", "wbr"}
+
+
+class Checker(HTMLParser):
+    """Collects tags, attributes and text; checks that non-void tags are balanced."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.stack, self.errors, self.imgs, self.urls, self.tags = [], [], [], [], []
+        self.text = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append(tag)
+        a = dict(attrs)
+        for k in ("src", "href", "data", "action", "poster"):
+            if k in a:
+                self.urls.append(a[k])
+        if tag == "img":
+            self.imgs.append(a)
+        if tag not in VOID:
+            self.stack.append(tag)
+
+    def handle_endtag(self, tag):
+        if tag in VOID:
+            return
+        if not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"unbalanced </{tag}> (open: {self.stack[-3:]})")
+        else:
+            self.stack.pop()
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+
+def check_html(text: str) -> Checker:
+    assert text.startswith("<!DOCTYPE html>")
+    c = Checker()
+    c.feed(text)
+    c.close()
+    assert not c.errors and not c.stack, (c.errors, c.stack)
+    # nothing external: no remote URL anywhere, every resource an inline data: URI
+    plain = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "DATA", text)
+    assert not re.search(r"(https?:)?//[a-z0-9]", plain, re.I)
+    assert "<script" not in plain and "<link" not in plain and "@import" not in plain
+    assert "url(" not in plain and "<iframe" not in plain
+    for u in c.urls:
+        assert u.startswith("data:image/png;base64,"), u[:40]
+    for img in c.imgs:
+        png = base64.b64decode(img["src"].split(",", 1)[1])
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+        assert img.get("alt")
+    return c
+
+
+def fake_evaluate(room, anchors, realizations=1, seed=0, nodes=None, **kw):
+    """A fast stand-in with the shapes of simulation.Evaluation (synthetic errors)."""
+    rng = np.random.default_rng(seed)
+    nodes = room.grid() if nodes is None else nodes
+    R, P, M = realizations, len(nodes), len(anchors)
+    est = nodes + rng.normal(0, 0.3, (R, P, 3))
+    errors = np.linalg.norm(est - nodes, axis=-1)
+    range_errors = rng.normal(0, 0.04, (R, P, M))
+    rmse = np.sqrt(np.mean(errors**2, axis=0))
+    sr = np.mean(np.std(range_errors, axis=0), axis=-1)
+    dop = np.divide(rmse, sr, out=np.full(P, np.inf), where=sr > 0)
+    return SimpleNamespace(
+        errors=errors, estimates=est, range_errors=range_errors, rmse=rmse, dop=dop
+    )
+
+
+def write_result(d, validation=True, history=True):
+    rng = np.random.default_rng(0)
+    errors = rng.gamma(2.0, 0.4, (4, 270))
+    T = 6
+    bah = [ROOM.corners_layout() + (OPT - ROOM.corners_layout()) * t / (T - 1) for t in range(T)]
+    result = {
+        "room": ROOM.to_dict(),
+        "anchors": OPT.tolist(),
+        "cost": 0.9848,
+        "cost_name": "variance",
+        "history": list(np.linspace(1.6, 0.9848, T)) if history else [],
+        "best_anchors_history": [b.tolist() for b in bah] if history else [],
+        "nfev": 48,
+        "nit": T,
+        "message": "reached the maximum number of iterations",
+        "success": True,
+        "seeds": [
+            {"name": "relax-A", "anchors": bah[1].tolist(), "cost": 1.65, "mean_peb": 0.08},
+            {"name": "relax-D", "anchors": bah[2].tolist(), "cost": None, "mean_peb": 0.08},
+        ],
+        "validation": {
+            "realizations": 4,
+            "seed": 7,
+            "std": float(np.std(errors)),
+            "mean": float(np.mean(errors)),
+            "p95": float(np.percentile(errors, 95)),
+            "rms": float(np.sqrt(np.mean(errors**2))),
+            "mean_peb": 0.177,
+            "per_node": {
+                "rmse": np.sqrt(np.mean(errors**2, axis=0)).tolist(),
+                "dop": (2.0 + rng.random(270)).tolist(),
+            },
+            "errors": errors.tolist(),
+        }
+        if validation
+        else {},
+        "timings": {"pso": 12.5, "total": 14.0},
+        "settings": {"M": 4, "particles": 8, "sigma": 0.04, "options": {"tol": 1e-3}},
+    }
+    (d / "result.json").write_text(json.dumps(result))
+    (d / "layout.json").write_text(json.dumps({"anchors": OPT.tolist()}))
+    return result, errors
+
+
+def test_report_from_result_json_with_simulator(tmp_path, monkeypatch):
+    monkeypatch.setattr(rp, "_evaluator", lambda: fake_evaluate)
+    result, errors = write_result(tmp_path)
+    path, rep = rp.write_report(tmp_path, realizations=3, dpi=40)
+    assert path == tmp_path / "report.html"
+    text = path.read_text()
+    c = check_html(text)
+    assert len(c.imgs) == len(rep.figures) == 8
+    titles = " | ".join(rep.figures)
+    for want in ("PEB map", "PEB at the evaluation nodes", "RMSE", "Error CDFs", "Bound vs",
+                 "DOP difference", "Layouts", "PSO evolution"):  # fmt: skip
+        assert want in titles
+    names = [e.name for e in rep.layouts]
+    assert names == ["optimized", "seed relax-A", "seed relax-D", "corners"]
+    body = "".join(c.text)
+    # σ / mean / P95 of the stored validation, mean PEB computed here, coordinates
+    v = result["validation"]
+    for key in ("std", "mean", "p95", "rms"):
+        assert f"{v[key]:.3f}" in body
+    mean_peb = np.mean(analysis.peb(OPT, NODES, 0.04))
+    assert f"{mean_peb:.3f}" in body
+    for a in OPT:
+        assert f"{a[0]:.3f}" in body and f"{a[2]:.3f}" in body
+    # gap table: median RMSE/PEB of the optimized layout from the stored per-node RMSE
+    rmse = np.asarray(v["per_node"]["rmse"])
+    ratio = np.median(rmse / analysis.peb(OPT, NODES, 0.04))
+    assert f"{ratio:.2f}" in body
+    assert "numpy" in body and np.__version__ in body
+    assert "simulated for this report (R = 3)" in body  # the corners reference
+
+
+def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch):
+    monkeypatch.setattr(rp, "_evaluator", lambda: None)
+    write_result(tmp_path, validation=False, history=False)
+    rep = rp.build_report(tmp_path, dpi=40)
+    check_html(rep.html)
+    assert not any("RMSE" in t or "CDF" in t for t in rep.figures)
+    assert any("not available" in n for n in rep.notes)
+    assert any("history" in n for n in rep.notes)
+    assert "not available" in rep.html
+
+
+def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
+    monkeypatch.setattr(rp, "_evaluator", lambda: None)
+    ev = fake_evaluate(ROOM, OPT, realizations=3, seed=1)
+    data = {
+        "room": ROOM.to_dict(),
+        "anchors": OPT.tolist(),
+        "nodes": NODES.tolist(),
+        "realizations": 3,
+        "seed": 1,
+        "stats": {"std": 0.123, "mean": 0.456, "p95": 1.789, "rms": 0.5},
+        "per_node": {"rmse": ev.rmse.tolist(), "dop": ev.dop.tolist()},
+        "errors": ev.errors.tolist(),
+    }
+    (tmp_path / "evaluation.json").write_text(json.dumps(data))
+    rep = rp.build_report(tmp_path, sigma=0.03, dpi=40)
+    c = check_html(rep.html)
+    body = "".join(c.text)
+    assert [e.name for e in rep.layouts] == ["evaluated", "corners"]
+    assert "0.123" in body and "0.456" in body and "1.789" in body
+    assert "σr = 0.03 m" in body.replace("\n", "")
+    assert any("Bound vs" in t for t in rep.figures)
+
+
+def test_report_merges_the_same_layout_from_both_files(tmp_path):
+    write_result(tmp_path)
+    ev = fake_evaluate(ROOM, OPT, realizations=9, seed=2)
+    (tmp_path / "evaluation.json").write_text(
+        json.dumps(
+            {
+                "room": ROOM.to_dict(),
+                "anchors": OPT.tolist(),
+                "realizations": 9,
+                "stats": {"std": 0.3, "mean": 0.4, "p95": 0.9, "rms": 0.5},
+                "per_node": {"rmse": ev.rmse.tolist(), "dop": ev.dop.tolist()},
+                "errors": ev.errors.tolist(),
+            }
+        )
+    )
+    layouts = rp.collect_layouts(rp.load_results(tmp_path), ROOM, NODES)
+    opt = layouts[0]
+    assert [e.role for e in layouts] == ["optimized", "seed", "seed", "reference"]
+    assert opt.sim.realizations == 9 and opt.sim.source == "evaluation.json"
+
+
+def test_report_bad_inputs(tmp_path, capsys):
+    with pytest.raises(FileNotFoundError):
+        rp.build_report(tmp_path)
+    (tmp_path / "result.json").write_text("{not json")
+    with pytest.raises(ValueError, match="JSON"):
+        rp.build_report(tmp_path)
+    assert main(["report", str(tmp_path / "missing")]) == 2
+    assert "not a folder" in capsys.readouterr().err
+
+
+def test_cli_report_with_the_real_simulator(tmp_path, capsys):
+    write_result(tmp_path)
+    out = tmp_path / "sub" / "r.html"
+    argv = ["report", str(tmp_path), "--out", str(out), "--realizations", "2", "--dpi", "50"]
+    assert main([*argv, "--figures", str(tmp_path / "figs")]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    c = check_html(out.read_text())
+    assert len(c.imgs) == 8
+    assert out.stat().st_size < 1_500_000
+    pngs = sorted((tmp_path / "figs").glob("*.png"))
+    assert len(pngs) == 8 and pngs[0].name == "01-peb-map-of-the-optimized-layout.png"
+    # the files are the embedded images
+    assert base64.b64encode(pngs[0].read_bytes()).decode() == c.imgs[0]["src"].split(",")[1]
+
+
+def test_report_with_one_realization_skips_the_dop_map(tmp_path, monkeypatch):
+    def one(room, anchors, realizations=1, seed=0, nodes=None, **kw):
+        ev = fake_evaluate(room, anchors, realizations, seed, nodes)
+        assert np.all(np.isinf(ev.dop))  # σ_r = 0 with one realization
+        return ev
+
+    monkeypatch.setattr(rp, "_evaluator", lambda: one)
+    write_result(tmp_path, validation=False)
+    rep = rp.build_report(tmp_path, realizations=1, dpi=30)
+    check_html(rep.html)
+    assert not any("DOP" in t for t in rep.figures)
+    assert any("DOP difference map skipped" in n for n in rep.notes)
+    assert any("RMSE" in t for t in rep.figures)
