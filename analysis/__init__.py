@@ -4,7 +4,13 @@ Imports only from :mod:`simulation` (never from :mod:`placement`).
 """
 
 from analysis.fim import crlb, crlb_trace, fim, gdop, peb
-from analysis.noise import ConstantRangeNoise, PhysicalRangeNoise, direct_amplitude
+from analysis.noise import (
+    CalibratedRangeNoise,
+    ConstantRangeNoise,
+    PhysicalRangeNoise,
+    calibrated_sigma,
+    direct_amplitude,
+)
 from analysis.statistics import (
     ErrorStats,
     axis_errors,
@@ -15,10 +21,12 @@ from analysis.statistics import (
 )
 
 __all__ = [
+    "CalibratedRangeNoise",
     "ConstantRangeNoise",
     "ErrorStats",
     "PhysicalRangeNoise",
     "axis_errors",
+    "calibrated_sigma",
     "crlb",
     "crlb_trace",
     "direct_amplitude",

@@ -4,8 +4,8 @@
   paper's 0.03–0.045 m).
 - :class:`PhysicalRangeNoise`: σ_j(p) from the SNR that node p sees from anchor j, through
   the Cramér–Rao bound for time-delay estimation of the received 1 ms window.
-- A model calibrated from simulated range errors lives with the simulator
-  (``simulation`` issue): any (M,) or (P, M) array works as ``sigma``.
+- :class:`CalibratedRangeNoise` / :func:`calibrated_sigma`: robust per-anchor σ from
+  simulated range errors (``simulation.evaluate_layout(...).range_errors``).
 
 Every model has ``sigma(anchors, positions)`` returning σ in metres, broadcastable to
 (..., P, M) for anchors (..., M, 3) and positions (P, 3).
@@ -133,3 +133,99 @@ class PhysicalRangeNoise:
         with np.errstate(divide="ignore", invalid="ignore"):
             s = c / (2 * np.pi) * (ref / amp) / np.sqrt(snr * f2)
         return np.where(np.isfinite(s) & (f2 > 0), s, np.inf)
+
+
+# -- calibrated from simulated range errors (SPEC §3) ------------------------------------
+
+#: 1/Φ⁻¹(¾): makes the median absolute deviation a consistent σ estimate for a Gaussian
+MAD_TO_SIGMA = 1.482602218505602
+
+
+def calibrated_sigma(
+    range_errors, method: str = "inlier", per_node: bool = False, k: float = 3.0
+) -> np.ndarray:
+    """Robust range σ in metres from simulated range errors (R, P, M) (or (N, M)).
+
+    The simulated errors mix a near-Gaussian core (the right correlation peak, a few
+    centimetres) with reflection outliers (metres), so the plain standard deviation is
+    dominated by the outliers. ``method``:
+
+    - ``"inlier"`` (default): the standard deviation of the errors within ``k`` MAD-σ of
+      the median (unbiased for a Gaussian core with ~10 % gross outliers to ~1 %);
+    - ``"mad"``: σ = 1.4826 · median |e − median e| (the Gaussian-consistent MAD; the
+      outliers inflate it by about 1.2× their fraction).
+
+    Pools realizations and nodes per anchor, returning (M,); with ``per_node=True`` pools
+    realizations only and returns (P, M) (input must be (R, P, M), R ≥ 2). σ = 0 (a
+    noise-free constant error) is returned as the smallest positive float so the result
+    can be used as ``sigma`` in :func:`analysis.fim` / :func:`analysis.peb`.
+    """
+    e = np.asarray(range_errors, dtype=float)
+    if method not in ("mad", "inlier"):
+        raise ValueError(f"method: must be 'mad' or 'inlier', got {method!r}")
+    if not (math.isfinite(k) and k > 0):
+        raise ValueError(f"k: must be > 0, got {k}")
+    if per_node:
+        if e.ndim != 3 or e.shape[0] < 2:
+            raise ValueError(f"range_errors: per_node needs shape (R >= 2, P, M), got {e.shape}")
+        x = e
+    else:
+        if e.ndim < 2:
+            raise ValueError(f"range_errors: expected shape (..., M), got {e.shape}")
+        x = e.reshape(-1, e.shape[-1])
+    if not np.all(np.isfinite(x)):
+        raise ValueError("range_errors: must be finite")
+    med = np.median(x, axis=0)
+    sigma = MAD_TO_SIGMA * np.median(np.abs(x - med), axis=0)
+    if method == "inlier":
+        inl = np.abs(x - med) <= k * sigma
+        n = np.sum(inl, axis=0)
+        mean = np.sum(np.where(inl, x, 0.0), axis=0) / np.maximum(n, 1)
+        var = np.sum(np.where(inl, (x - mean) ** 2, 0.0), axis=0) / np.maximum(n, 1)
+        sigma = np.sqrt(var)
+    return np.maximum(sigma, np.finfo(float).tiny)
+
+
+@dataclass(frozen=True)
+class CalibratedRangeNoise:
+    """σ_j calibrated from simulated range errors: one value per anchor (M,) or (P, M).
+
+    Build with :meth:`from_range_errors` (e.g. ``Evaluation.range_errors`` of
+    :func:`simulation.evaluate_layout`) so that the PEB and the simulation are compared on
+    the same footing; :meth:`sigma` returns the stored values for the layout they were
+    calibrated on.
+    """
+
+    values: np.ndarray
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.values, dtype=float)
+        if v.ndim not in (1, 2) or v.size == 0:
+            raise ValueError(f"values: expected shape (M,) or (P, M), got {v.shape}")
+        if not np.all(np.isfinite(v) & (v > 0)):
+            raise ValueError("values: every σ must be finite and > 0 m")
+        object.__setattr__(self, "values", v)
+
+    @classmethod
+    def from_range_errors(
+        cls, range_errors, method: str = "inlier", per_node: bool = False, k: float = 3.0
+    ) -> CalibratedRangeNoise:
+        """Calibrate with :func:`calibrated_sigma`."""
+        return cls(calibrated_sigma(range_errors, method=method, per_node=per_node, k=k))
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        """The values as an array, so the model itself can be passed as ``sigma``."""
+        return np.array(self.values, dtype=dtype, copy=True if copy is None else copy)
+
+    def sigma(self, anchors, positions) -> np.ndarray:
+        """The calibrated σ, (M,) or (P, M); checks M (and P) against the arguments."""
+        a = np.asarray(anchors, dtype=float)
+        p = np.asarray(positions, dtype=float)
+        M = a.shape[-2]
+        if self.values.shape[-1] != M:
+            raise ValueError(f"anchors: calibrated for {self.values.shape[-1]} anchors, got {M}")
+        if self.values.ndim == 2 and self.values.shape[0] != p.shape[0]:
+            raise ValueError(
+                f"positions: calibrated per node for {self.values.shape[0]} nodes, got {p.shape[0]}"
+            )
+        return self.values

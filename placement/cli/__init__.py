@@ -11,6 +11,9 @@ import sys
 COMMANDS = (
     "plan",
     "bounds",
+    "evaluate",
+    "report",
+    "peb_map",
 )
 
 

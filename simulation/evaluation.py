@@ -1,0 +1,333 @@
+"""Monte Carlo evaluation of an anchor layout with the full chirp simulator (SPEC §2, §3).
+
+One realization: for every node and anchor, the received window (image-source multipath,
+:mod:`simulation.received`) plus AWGN (:mod:`simulation.noise`) goes through the receiver
+DSP (:mod:`simulation.receiver`) to a range; the node is then located by least squares
+(:mod:`simulation.positioning`). The noise-free windows do not depend on the realization
+and are computed once per layout (:class:`RangingScene`).
+
+Randomness: realization r draws its noise from its own stream,
+``np.random.default_rng(SeedSequence(seed).spawn(R)[r])``, so results do not depend on
+how realizations are chunked.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.fft
+
+from simulation.chirp import Chirp
+from simulation.multipath import ImageSet, compute_paths
+from simulation.noise import DEFAULT_SNR_DB, noise_sigma
+from simulation.positioning import locate
+from simulation.received import received_windows
+from simulation.receiver import Receiver, dsp_for
+from simulation.room import Room
+
+#: noise samples held in memory at once when chunking realizations (bytes)
+NOISE_BUDGET_BYTES = 64 * 2**20
+
+
+class RangingScene:
+    """A layout in a room, prepared for drawing range realizations quickly.
+
+    Holds the noise-free windows (P, M, N), the true distances (P, M), the per-anchor noise
+    σ (M,) of the SNR rule and the receiver DSP (``precision``: see
+    :class:`~simulation.receiver.Dsp`). ``ranges(rng)`` draws one realization.
+    """
+
+    def __init__(
+        self,
+        room: Room,
+        anchors,
+        nodes=None,
+        *,
+        snr_db: float = DEFAULT_SNR_DB,
+        chirp: Chirp | None = None,
+        receiver: Receiver | None = None,
+        precision: str = "float64",
+    ):
+        self.room = room
+        self.anchors = room.check_anchors(anchors, min_anchors=1)
+        self.nodes = room.grid() if nodes is None else _check_nodes(nodes)
+        self.chirp = Chirp() if chirp is None else chirp
+        self.receiver = Receiver() if receiver is None else receiver
+        if not math.isfinite(snr_db):
+            raise ValueError(f"snr_db: must be finite, got {snr_db}")
+        self.snr_db = float(snr_db)
+        c = room.speed_of_sound
+        images = ImageSet.for_room(room)
+        paths = compute_paths(room, self.anchors, self.nodes, images=images)
+        self.distances = paths.length[:, :, 0]  # image 0 is the direct path
+        self.windows = received_windows(paths, c, self.chirp, self.receiver)
+        self.noise_sigma = noise_sigma(
+            room, self.anchors, snr_db, self.chirp, self.receiver, images=images
+        )
+        self.dsp = dsp_for(self.chirp, self.receiver, precision)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(P, M)."""
+        return self.windows.shape[:2]
+
+    def _to_ranges(self, windows: np.ndarray) -> np.ndarray:
+        return self.dsp.ranges(windows, self.room.speed_of_sound)
+
+    def noisy_windows(self, rng: np.random.Generator) -> np.ndarray:
+        """(P, M, N) received windows of one realization: clean + σ_j · N(0, 1) from ``rng``."""
+        return self.windows + self.noise_sigma[:, None] * rng.standard_normal(self.windows.shape)
+
+    def ranges(self, rng: np.random.Generator | None = None, noise: bool = True) -> np.ndarray:
+        """(P, M) estimated ranges in metres for one realization drawn from ``rng``."""
+        if not noise:
+            return self._to_ranges(self.windows)
+        return self._to_ranges(self.noisy_windows(np.random.default_rng() if rng is None else rng))
+
+    def ranges_batch(self, rngs, noise: bool = True) -> np.ndarray:
+        """(len(rngs), P, M) ranges, realization r drawn from ``rngs[r]``."""
+        if not noise:
+            r0 = self._to_ranges(self.windows)
+            return np.broadcast_to(r0, (len(rngs), *r0.shape)).copy()
+        return self._to_ranges(np.stack([self.noisy_windows(g) for g in rngs]))
+
+
+def _check_nodes(nodes) -> np.ndarray:
+    p = np.asarray(nodes, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 1:
+        raise ValueError(f"nodes: expected shape (P, 3) with P >= 1, got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ValueError("nodes: coordinates must be finite")
+    return p
+
+
+def simulate_ranges(
+    room: Room,
+    anchors,
+    nodes,
+    noise: bool = True,
+    rng: np.random.Generator | None = None,
+    snr_db: float = DEFAULT_SNR_DB,
+    chirp: Chirp | None = None,
+    receiver: Receiver | None = None,
+    precision: str = "float64",
+) -> np.ndarray:
+    """(P, M) range estimates in metres from the full simulation, one realization.
+
+    ``rng`` (numpy Generator) draws the noise (a fresh unseeded one when None).
+    """
+    scene = RangingScene(
+        room,
+        anchors,
+        nodes,
+        snr_db=snr_db,
+        chirp=chirp,
+        receiver=receiver,
+        precision=precision,
+    )
+    return scene.ranges(rng, noise=noise)
+
+
+def _stats(e: np.ndarray) -> dict:
+    v = e[np.isfinite(e)]
+    if v.size == 0:
+        nan = float("nan")
+        return {"std": nan, "mean": nan, "p95": nan, "rms": nan, "median": nan, "max": nan}
+    return {
+        "std": float(np.std(v)),
+        "mean": float(np.mean(v)),
+        "p95": float(np.percentile(v, 95)),
+        "rms": float(np.sqrt(np.mean(v * v))),
+        "median": float(np.median(v)),
+        "max": float(np.max(v)),
+    }
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Monte Carlo result of :func:`evaluate_layout` (metres throughout).
+
+    anchors (M, 3), nodes (P, 3); estimates (R, P, 3); ranges (R, P, M) estimated ranges;
+    range_errors (R, P, M) = ranges − true distances; errors (R, P) Euclidean position
+    errors; converged (R, P) solver flags; noise_sigma (M,) the AWGN σ per anchor.
+    Statistics (``std`` population σ, ``mean``, ``p95``, ``rms``) are over all R·P errors.
+    """
+
+    anchors: np.ndarray
+    nodes: np.ndarray
+    estimates: np.ndarray
+    ranges: np.ndarray
+    range_errors: np.ndarray
+    errors: np.ndarray
+    converged: np.ndarray
+    noise_sigma: np.ndarray
+    seed: int | None
+    snr_db: float
+    room: Room = field(repr=False)
+
+    @property
+    def realizations(self) -> int:
+        return self.errors.shape[0]
+
+    @property
+    def stats(self) -> dict:
+        """std, mean, p95, rms, median, max over all R·P Euclidean errors."""
+        return _stats(self.errors)
+
+    @property
+    def std(self) -> float:
+        return self.stats["std"]
+
+    @property
+    def mean(self) -> float:
+        return self.stats["mean"]
+
+    @property
+    def p95(self) -> float:
+        return self.stats["p95"]
+
+    @property
+    def rms(self) -> float:
+        return self.stats["rms"]
+
+    @property
+    def axis_errors(self) -> np.ndarray:
+        """(R, P, 3) absolute per-axis errors |p̂ − p|."""
+        return np.abs(self.estimates - self.nodes)
+
+    @property
+    def rmse(self) -> np.ndarray:
+        """(P,) RMS over realizations of the Euclidean error (σ_pos of SPEC §3)."""
+        return np.sqrt(np.mean(self.errors**2, axis=0))
+
+    @property
+    def node_mean(self) -> np.ndarray:
+        """(P,) mean Euclidean error per node."""
+        return np.mean(self.errors, axis=0)
+
+    @property
+    def range_std(self) -> np.ndarray:
+        """(P,) σ_r: mean over anchors of the std over realizations of the range error."""
+        return np.mean(np.std(self.range_errors, axis=0), axis=-1)
+
+    @property
+    def dop(self) -> np.ndarray:
+        """(P,) DOP = σ_pos / σ_r (SPEC §3); +inf where σ_r = 0 (e.g. one realization)."""
+        sr = self.range_std
+        out = np.full(sr.shape, np.inf)
+        np.divide(self.rmse, sr, out=out, where=sr > 0)
+        return out
+
+    @property
+    def n_unconverged(self) -> int:
+        return int(np.sum(~self.converged))
+
+    def to_dict(self, include_errors: bool = True) -> dict:
+        """Plain JSON-ready dictionary (non-finite floats stay floats; the CLI maps them)."""
+        ax = self.axis_errors
+        d = {
+            "room": self.room.to_dict(),
+            "anchors": self.anchors.tolist(),
+            "nodes": self.nodes.tolist(),
+            "realizations": self.realizations,
+            "seed": self.seed,
+            "snr_db": self.snr_db,
+            "noise_sigma": self.noise_sigma.tolist(),
+            "stats": {
+                **self.stats,
+                "n": int(self.errors.size),
+                "n_unconverged": self.n_unconverged,
+                "axis_mean": np.mean(ax, axis=(0, 1)).tolist(),
+                "axis_p95": np.percentile(ax, 95, axis=(0, 1)).tolist(),
+                "range_error_median_abs": np.median(
+                    np.abs(self.range_errors), axis=(0, 1)
+                ).tolist(),
+            },
+            "per_node": {
+                "rmse": self.rmse.tolist(),
+                "dop": self.dop.tolist(),
+                "mean": self.node_mean.tolist(),
+                "range_std": self.range_std.tolist(),
+            },
+        }
+        if include_errors:
+            d["errors"] = self.errors.tolist()
+            d["converged"] = self.converged.tolist()
+        return d
+
+
+def evaluate_layout(
+    room: Room,
+    anchors,
+    realizations: int = 1,
+    seed: int | None = 0,
+    nodes=None,
+    *,
+    noise: bool = True,
+    snr_db: float = DEFAULT_SNR_DB,
+    chirp: Chirp | None = None,
+    receiver: Receiver | None = None,
+    bounded: bool = False,
+    max_iter: int = 100,
+    chunk: int | None = None,
+    precision: str = "float64",
+    workers: int | None = None,
+) -> Evaluation:
+    """Simulate ``realizations`` noisy range sets for every node and locate the nodes.
+
+    anchors (M, 3) must lie in the room (M ≥ 4); nodes (P, 3) default to ``room.grid()``.
+    ``chunk`` realizations are processed at a time (default: as many as fit in
+    :data:`NOISE_BUDGET_BYTES` of noise); the result does not depend on it. ``bounded``
+    keeps the position estimates inside the room. ``precision="float32"`` selects the
+    faster single-precision DSP (see :class:`~simulation.receiver.Dsp`). ``workers``
+    threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
+    ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
+    """
+    anchors = room.check_anchors(anchors)
+    if int(realizations) != realizations or realizations < 1:
+        raise ValueError(f"realizations: must be an integer >= 1, got {realizations}")
+    realizations = int(realizations)
+    scene = RangingScene(
+        room,
+        anchors,
+        nodes,
+        snr_db=snr_db,
+        chirp=chirp,
+        receiver=receiver,
+        precision=precision,
+    )
+    P, M = scene.shape
+    if chunk is None:
+        per = P * M * scene.receiver.window * 8
+        chunk = max(1, NOISE_BUDGET_BYTES // per)
+    if int(chunk) != chunk or chunk < 1:
+        raise ValueError(f"chunk: must be an integer >= 1, got {chunk}")
+    chunk = int(chunk)
+    children = np.random.SeedSequence(seed).spawn(realizations)
+    ranges = np.empty((realizations, P, M))
+    threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
+    with threads:
+        for i in range(0, realizations, chunk):
+            rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
+            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
+    region = (np.zeros(3), np.asarray(room.size, dtype=float))
+    fix = locate(
+        anchors, ranges, region=region, bounded=bounded, max_iter=max_iter, full_output=True
+    )
+    errors = np.linalg.norm(fix.x - scene.nodes, axis=-1)
+    return Evaluation(
+        anchors=anchors,
+        nodes=scene.nodes,
+        estimates=fix.x,
+        ranges=ranges,
+        range_errors=ranges - scene.distances,
+        errors=errors,
+        converged=fix.converged,
+        noise_sigma=scene.noise_sigma,
+        seed=None if seed is None else int(seed) if np.isscalar(seed) else None,
+        snr_db=scene.snr_db,
+        room=room,
+    )

@@ -1,0 +1,141 @@
+"""Image-source multipath in a shoebox room with a cardioid speaker (SPEC §2).
+
+Every anchor j has image sources indexed by n = (nx, ny, nz) ∈ ℤ³ with |nx|+|ny|+|nz| ≤
+``room.max_order`` (Allen & Berkley). Along an axis of length L, the image of a coordinate
+a is n·L + a for even n and (n+1)·L − a for odd n. A path reaching the node p from the image
+at q has length d = ‖p − q‖ and amplitude
+
+    A = Π_walls β · g(cos θ) · exp(−a·d/2) / (4π d),
+
+with β = √(1 − α) the reflection amplitude of each wall hit (for n > 0 the path hits the
+plane at L ⌈n/2⌉ times and the plane at 0 ⌊n/2⌋ times, mirrored for n < 0), a the air
+attenuation coefficient and g(θ) = ½(1 + cos θ) the cardioid of the real speaker aimed at
+the room centroid. θ is measured for the ray as it leaves the real speaker: the direction
+image → node, mirrored back through the reflections, i.e. with the sign of each component
+flipped for every axis that is reflected an odd number of times. The node is
+omnidirectional. This is the convention of pyroomacoustics' shoebox ISM
+(``libroom`` ``image_source_shoebox``), the peer simulator of the tests.
+
+Images whose wall product is zero (e.g. the techtile room's fully absorbing west and east
+walls) are dropped once per room, so the path axis only holds paths that can carry energy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simulation.directivity import aim_vectors, cardioid
+from simulation.room import Room
+
+
+def image_indices(max_order: int) -> np.ndarray:
+    """(I, 3) integer image indices n with |nx|+|ny|+|nz| ≤ ``max_order``; n = 0 first.
+
+    I = (2N+1)(2N²+2N+3)/3 for order N (63 for N = 3).
+    """
+    if int(max_order) != max_order or max_order < 0:
+        raise ValueError(f"max_order: must be an integer >= 0, got {max_order}")
+    r = np.arange(-int(max_order), int(max_order) + 1)
+    n = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
+    order = np.abs(n).sum(axis=1)
+    n = n[order <= max_order]
+    # direct path first, then by order (stable), so path 0 is always the line of sight
+    return n[np.argsort(np.abs(n).sum(axis=1), kind="stable")]
+
+
+def wall_hits(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reflection counts on the planes at 0 and at L for image indices n (any int array).
+
+    Returns (hits_low, hits_high) of the shape of n: for n > 0, ⌊n/2⌋ and ⌈n/2⌉; for n < 0,
+    ⌈|n|/2⌉ and ⌊|n|/2⌋.
+    """
+    n = np.asarray(n)
+    a = np.abs(n)
+    low = np.where(n >= 0, a // 2, (a + 1) // 2)
+    high = np.where(n >= 0, (a + 1) // 2, a // 2)
+    return low, high
+
+
+@dataclass(frozen=True)
+class ImageSet:
+    """Image indices of a room that can carry energy, and their wall-reflection products.
+
+    indices : (I, 3) int image indices (path 0 is the direct path).
+    reflection : (I,) amplitude product Π β over the walls each image's path hits (> 0).
+    mirror : (I, 3) ±1, −1 on axes reflected an odd number of times.
+    """
+
+    indices: np.ndarray
+    reflection: np.ndarray
+    mirror: np.ndarray
+
+    @classmethod
+    def for_room(cls, room: Room) -> ImageSet:
+        """Images up to ``room.max_order`` with a nonzero wall product."""
+        n = image_indices(room.max_order)
+        beta = room.reflections  # (3, 2) by [axis, side]
+        low, high = wall_hits(n)
+        with np.errstate(divide="ignore"):
+            # 0**0 = 1: a wall that is never hit does not matter even when β = 0
+            refl = np.prod(beta[:, 0] ** low * beta[:, 1] ** high, axis=1)
+        keep = refl > 0
+        n = n[keep]
+        return cls(
+            indices=n, reflection=refl[keep], mirror=np.where(n % 2 == 0, 1.0, -1.0).astype(float)
+        )
+
+    def __len__(self) -> int:
+        return len(self.indices)
+
+    def positions(self, room: Room, anchors: np.ndarray) -> np.ndarray:
+        """(M, I, 3) image positions of anchors (M, 3)."""
+        a = np.asarray(anchors, dtype=float)[:, None, :]
+        L = np.asarray(room.size)
+        n = self.indices[None]
+        odd = (n % 2) != 0
+        return np.where(odd, (n + 1) * L - a, n * L + a)
+
+
+@dataclass(frozen=True)
+class Paths:
+    """Propagation paths from every anchor to every node.
+
+    length : (P, M, I) path lengths d in metres.
+    amplitude : (P, M, I) amplitudes A (unit-amplitude chirp at the speaker); paths that
+        carry no energy (cardioid null) have A = 0.
+    """
+
+    length: np.ndarray
+    amplitude: np.ndarray
+
+    def delays(self, speed_of_sound: float) -> np.ndarray:
+        """(P, M, I) propagation delays d/c in seconds."""
+        return self.length / speed_of_sound
+
+
+def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, aim_at=None) -> Paths:
+    """Image-source paths from anchors (M, 3) to nodes (P, 3), vectorized over P × M × I.
+
+    ``aim_at`` (3,) is where the cardioids point (default the room centroid, SPEC §2).
+    A node exactly on an image (d = 0) is not physical; such paths get A = 0.
+    """
+    a = np.asarray(anchors, dtype=float)
+    p = np.asarray(nodes, dtype=float)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"anchors: expected shape (M, 3), got {a.shape}")
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError(f"nodes: expected shape (P, 3), got {p.shape}")
+    images = ImageSet.for_room(room) if images is None else images
+    aim = aim_vectors(a, room.centroid if aim_at is None else np.asarray(aim_at, float))  # (M,3)
+    q = images.positions(room, a)  # (M, I, 3)
+    u = p[:, None, None, :] - q[None]  # (P, M, I, 3) image -> node
+    d = np.sqrt(np.einsum("pmik,pmik->pmi", u, u))
+    # emission direction of the real speaker: mirror back through the reflections
+    proj = np.einsum("pmik,ik,mk->pmi", u, images.mirror, aim)
+    ok = d > 0
+    safe = np.where(ok, d, 1.0)
+    gain = cardioid(np.clip(proj / safe, -1.0, 1.0))
+    amp = images.reflection * gain * np.exp(-0.5 * room.air_absorption * d) / (4 * np.pi * safe)
+    return Paths(length=d, amplitude=np.where(ok, amp, 0.0))

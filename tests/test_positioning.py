@@ -1,0 +1,103 @@
+import numpy as np
+import pytest
+import scipy.optimize
+
+from placement import random_layout
+from simulation import Room, locate
+from simulation.positioning import linear_start
+
+ROOM = Room.techtile()
+REGION = (np.zeros(3), np.array(ROOM.size))
+
+
+def _ranges(anchors, nodes):
+    return np.linalg.norm(nodes[:, None, :] - anchors[None], axis=-1)
+
+
+@pytest.mark.parametrize("M", [4, 6, 8])
+def test_exact_ranges_recover_positions(M):
+    rng = np.random.default_rng(M)
+    nodes = ROOM.grid()
+    for anchors in (ROOM.corners_layout() if M == 4 else random_layout(ROOM, M, rng),):
+        fix = locate(anchors, _ranges(anchors, nodes), region=REGION, full_output=True)
+        assert fix.success
+        assert np.max(np.linalg.norm(fix.x - nodes, axis=-1)) < 1e-6
+
+
+def test_exact_ranges_from_the_room_centre_and_coplanar_anchors():
+    nodes = ROOM.grid()
+    nodes = nodes[nodes[:, 2] < 2.0]
+    # all anchors on the ceiling: the linear start is undefined and every node has a
+    # mirror image above the anchors' plane; from the room centre LM finds the one below
+    # (nodes just under the plane, 2 cm here, can flip: the problem is near-degenerate)
+    anchors = np.array([[1, 1, 2.37], [7, 1, 2.37], [7, 3, 2.37], [1, 3, 2.37], [4, 2, 2.37]])
+    assert linear_start(anchors, _ranges(anchors, nodes)) is None
+    fix = locate(anchors, _ranges(anchors, nodes), region=REGION, full_output=True)
+    assert fix.success
+    assert np.allclose(fix.start, ROOM.centroid)
+    assert np.max(np.linalg.norm(fix.x - nodes, axis=-1)) < 1e-6
+
+
+def test_linear_start_is_exact_for_exact_ranges():
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()
+    assert np.allclose(linear_start(a, _ranges(a, nodes)), nodes, atol=1e-9)
+
+
+def test_batched_shapes_and_matches_scipy_on_outliers():
+    rng = np.random.default_rng(0)
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()[::10]
+    r = np.broadcast_to(_ranges(a, nodes), (3, *_ranges(a, nodes).shape)).copy()
+    # reverberant-like errors: centimetre noise plus metre outliers
+    r += rng.normal(0, 0.03, r.shape)
+    out = rng.random(r.shape) < 0.2
+    r[out] += rng.uniform(0.5, 4.0, out.sum())
+    fix = locate(a, r, region=REGION, full_output=True)
+    assert fix.x.shape == (3, len(nodes), 3) and fix.converged.shape == (3, len(nodes))
+    assert fix.converged.mean() > 0.95
+    # same local minimum as scipy's MINPACK LM from the same start
+    for i in np.ndindex(*fix.converged.shape):
+        if not fix.converged[i]:
+            continue
+        res = scipy.optimize.least_squares(
+            lambda x, i=i: np.linalg.norm(x - a, axis=1) - r[i], fix.start[i], method="lm"
+        )
+        assert fix.cost[i] <= res.cost * (1 + 1e-6) + 1e-12
+    # plain call returns only the positions
+    x = locate(a, r, region=REGION)
+    assert np.array_equal(x, fix.x)
+
+
+def test_nonconvergence_is_flagged_with_best_iterate():
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()[::7]
+    r = _ranges(a, nodes) + 1.5 * (np.arange(4) % 2)  # inconsistent ranges
+    fix = locate(a, r, region=REGION, max_iter=1, full_output=True)
+    assert not fix.success
+    assert np.all(fix.status[~fix.converged] == 0)
+    start_cost = 0.5 * np.sum((_ranges(a, fix.start) - r) ** 2, axis=-1)
+    assert np.all(fix.cost <= start_cost + 1e-12)
+    assert np.all(np.isfinite(fix.x))
+
+
+def test_bounded_keeps_estimates_in_the_box():
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()
+    r = _ranges(a, nodes) + 2.0  # every range too long: unbounded LS leaves the room
+    free = locate(a, r, region=REGION)
+    box = locate(a, r, region=REGION, bounded=True)
+    assert not np.all(ROOM.contains(free))
+    assert np.all(ROOM.contains(box))
+
+
+def test_bad_input():
+    a = ROOM.corners_layout()
+    with pytest.raises(ValueError, match="ranges"):
+        locate(a, np.full((5, 3), 1.0))
+    with pytest.raises(ValueError, match="ranges"):
+        locate(a, np.array([[1.0, np.nan, 2.0, 3.0]]))
+    with pytest.raises(ValueError, match="anchors"):
+        locate(a[:2], np.ones((1, 2)))
+    with pytest.raises(ValueError, match="max_iter"):
+        locate(a, np.ones((1, 4)), max_iter=0)

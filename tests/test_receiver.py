@@ -1,0 +1,148 @@
+import numpy as np
+import pytest
+
+from simulation import Chirp, Receiver, Room
+from simulation.multipath import compute_paths
+from simulation.noise import noise_sigma
+from simulation.received import received_windows, synthesize, synthesize_direct
+from simulation.receiver import dsp_for, reference_chain, snap_to_peak
+
+ALL = ("floor", "ceiling", "south", "north", "west", "east")
+ANECHOIC = Room(absorption={k: 1.0 for k in ALL})
+RX, CH = Receiver(), Chirp()
+C = Room.techtile().speed_of_sound
+
+
+def _single_path_windows(d, amp=1.0):
+    d = np.atleast_1d(np.asarray(d, dtype=float))
+    return synthesize((d / C)[:, None], np.full((len(d), 1), amp), CH, RX)
+
+
+def _mixed_windows(rng, n_noisy=2):
+    """Anechoic, reverberant and noisy windows from a few layouts (W, N)."""
+    room = Room.techtile()
+    nodes = room.grid()[rng.choice(270, 12, replace=False)]
+    out = []
+    for r in (ANECHOIC, room):
+        w = received_windows(compute_paths(r, r.corners_layout(), nodes), C)
+        out.append(w.reshape(-1, RX.window))
+    s = noise_sigma(room, room.corners_layout())
+    w = out[-1].reshape(12, 4, -1)
+    for _ in range(n_noisy):
+        out.append((w + s[:, None] * rng.standard_normal(w.shape)).reshape(-1, RX.window))
+    return np.concatenate(out)
+
+
+def test_fast_synthesis_equals_direct_evaluation():
+    for room in (Room.techtile(), Room(absorption={k: 0.2 for k in ALL})):
+        paths = compute_paths(room, room.corners_layout(), room.grid()[::5])
+        tau = paths.delays(room.speed_of_sound)
+        fast = synthesize(tau, paths.amplitude, CH, RX)
+        slow = synthesize_direct(tau, paths.amplitude, CH, RX)
+        scale = np.abs(slow).max(axis=-1, keepdims=True)
+        assert np.all(np.abs(fast - slow) <= 1e-10 * scale)
+
+
+def test_single_path_window_is_the_delayed_chirp():
+    t = RX.window_times
+    # fully inside, chirp starting inside the window (d > c·t_wake), after the window
+    for d in (0.5, 4.321, 9.96, 10.1, 10.5):
+        y = _single_path_windows(d, amp=0.7)[0]
+        assert np.allclose(y, 0.7 * CH(t - d / C), rtol=0, atol=1e-12)
+    assert np.all(_single_path_windows(10.5) == 0)  # arrives after the window closes
+
+
+def test_fast_dsp_gives_the_reference_index():
+    rng = np.random.default_rng(7)
+    w = _mixed_windows(rng)[::3]  # ~64 windows, every kind
+    dsp = dsp_for()
+    k = dsp.indices(w)
+    curve = dsp.correlation(w)
+    lp = dsp.lowpass(curve)
+    for i in range(len(w)):
+        ref = reference_chain(w[i])
+        assert k[i] == ref["k"]
+        np.testing.assert_allclose(curve[i], ref["corr"], rtol=0, atol=1e-9 * ref["corr"].max())
+        np.testing.assert_allclose(
+            lp[i], ref["lowpassed"], rtol=0, atol=1e-9 * ref["lowpassed"].max()
+        )
+    # blocking does not change anything
+    assert np.array_equal(dsp.indices(w, block=7), k)
+
+
+def test_float32_dsp_agrees_almost_always():
+    rng = np.random.default_rng(3)
+    w = np.concatenate([_mixed_windows(rng, n_noisy=8) for _ in range(4)])
+    k64 = dsp_for().indices(w)
+    k32 = dsp_for(precision="float32").indices(w)
+    assert len(w) > 1500
+    assert np.mean(k64 == k32) >= 0.995
+    with pytest.raises(ValueError, match="precision"):
+        dsp_for(precision="float16")
+
+
+def test_range_formula_and_wake_time_with_an_oracle_seed():
+    """Snapping the true correlation index to the nearest raw peak recovers the range to
+    half a sample: checks synthesis, the correlation convention, t_wake and r = c·τ."""
+    d = np.linspace(0.05, 9.9, 1500)
+    w = _single_path_windows(d)
+    dsp = dsp_for()
+    k_true = RX.index_from_range(d, C)
+    k = snap_to_peak(dsp.correlation(w), np.round(k_true).astype(int))
+    err = RX.range_from_index(k, C) - d
+    assert np.max(np.abs(err)) <= C / RX.fs / 2 + 1e-5
+    assert RX.range_from_index(RX.index_from_range(3.3, C), C) == pytest.approx(3.3)
+
+
+def test_anechoic_grid_ranges_spec_chain():
+    """Noise-free, anechoic: the SPEC chain's ranges are within centimetres of the truth.
+
+    Not millimetres: the 1 ms window holds a ~667 Hz slice of the sweep, so the envelope
+    of |c| is flat over ±100 samples, and sampling |c| at 192 kHz aliases its harmonics at
+    2m·f_c onto the 5 kHz low-pass band (worst when f_c ≈ fs/6 = 32 kHz or fs/5). The
+    low-pass argmax moves by a few samples and snaps onto a neighbouring carrier peak
+    (≈ 2–7 samples apart).
+    """
+    nodes, anchors = ANECHOIC.grid(), ANECHOIC.corners_layout()
+    w = received_windows(compute_paths(ANECHOIC, anchors, nodes), C)
+    dsp = dsp_for()
+    k = dsp.indices(w)
+    r = RX.range_from_index(k, C)
+    d = np.linalg.norm(nodes[:, None] - anchors[None], axis=-1)
+    err = np.abs(r - d)
+    assert np.max(err) <= 0.15
+    assert np.median(err) <= 0.015
+    # every estimate is a local maximum of the raw curve
+    curve = dsp.correlation(w.reshape(-1, RX.window))
+    kk = k.ravel()
+    rows = np.arange(len(kk))
+    assert np.all(curve[rows, kk] >= curve[rows, kk - 1])
+    assert np.all(curve[rows, kk] >= curve[rows, kk + 1])
+
+
+def test_anechoic_error_peaks_where_carrier_harmonics_alias():
+    d = np.linspace(0.3, 9.5, 3000)
+    fc = CH.f0 + CH.rate * (RX.t_wake + RX.window / RX.fs / 2 - d / C)
+    err = np.abs(dsp_for().ranges(_single_path_windows(d), C) - d)
+    near_fs6 = np.abs(fc - RX.fs / 6) < 500
+    clean = (fc > 40e3) & (fc < 43e3)
+    assert np.median(err[near_fs6]) > 2 * np.median(err[clean])
+
+
+def test_snap_to_peak_nearest_and_ties():
+    x = np.array([[0, 1, 0, 0, 2, 0, 0, 0, 0], [0, 3, 1, 0, 0, 0, 1, 3, 0]], dtype=float)
+    assert snap_to_peak(x, np.array([3, 4])).tolist() == [4, 1]  # 2 vs 2 away: lower wins
+    assert snap_to_peak(x, np.array([0, 8])).tolist() == [1, 7]
+    flat = np.zeros((1, 9))
+    assert snap_to_peak(flat, np.array([5])).tolist() == [5]  # no peak: unchanged
+
+
+def test_receiver_validation():
+    with pytest.raises(ValueError, match="lowpass_taps"):
+        Receiver(lowpass_taps=0)
+    with pytest.raises(ValueError, match="highpass_order"):
+        Receiver(highpass_order=2.5)
+    with pytest.raises(ValueError, match="window"):
+        dsp_for().indices(np.zeros((3, 100)))
+    with pytest.raises(ValueError, match="window"):
+        reference_chain(np.zeros(100))
