@@ -3,7 +3,10 @@
 The top layer: imports :mod:`analysis` and :mod:`simulation`, never the reverse.
 """
 
+from placement.costs import PEBCost, SimulatedCost, make_cost
 from placement.exhaustive import ExhaustiveResult, exhaustive_search
+from placement.plan import PlacementResult, SeedLayout, seed_then_pso
+from placement.pso import PSOOptions, PSOResult, pso
 from placement.refine import RefineResult, refine_peb
 from placement.relaxation import Selection, relax_select
 from placement.surfaces import (
@@ -21,6 +24,15 @@ from placement.surfaces import (
 )
 
 __all__ = [
+    "PEBCost",
+    "PSOOptions",
+    "PSOResult",
+    "PlacementResult",
+    "SeedLayout",
+    "SimulatedCost",
+    "make_cost",
+    "pso",
+    "seed_then_pso",
     "ExhaustiveResult",
     "MountingSurface",
     "RefineResult",

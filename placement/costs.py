@@ -35,13 +35,15 @@ class SimulatedCost:
 
     Each call simulates ``realizations`` noisy realizations of the full chirp pipeline
     (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
-    drawn from the given generator.
+    drawn from the given generator. ``precision="float32"`` selects the faster
+    single-precision receiver DSP (same range index for about 99.9 % of pairs).
     """
 
     room: Room = field(default_factory=Room.techtile)
     statistic: str = "variance"
     realizations: int = 1
     nodes: np.ndarray | None = None
+    precision: str = "float64"
 
     def __post_init__(self) -> None:
         if self.statistic not in SIMULATED_STATISTICS:
@@ -60,6 +62,7 @@ class SimulatedCost:
             realizations=int(self.realizations),
             seed=int(rng.integers(2**63)),
             nodes=self.nodes,
+            precision=self.precision,
         )
         e = np.asarray(ev.errors, dtype=float)
         if not np.all(np.isfinite(e)):
