@@ -1,0 +1,51 @@
+import json
+
+import numpy as np
+
+import placement
+from placement.cli import main
+from simulation import Room
+
+
+def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = [
+        "plan",
+        "--anchors",
+        "4",
+        "--particles",
+        "4",
+        "--iterations",
+        "2",
+        "--validate-realizations",
+        "2",
+        "--no-progress",
+        "--seed",
+        "3",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "validation over 2 realizations" in text
+    res = json.loads((out / "result.json").read_text())
+    layout = json.loads((out / "layout.json").read_text())
+    room = Room.techtile()
+    anchors = np.array(layout["anchors"])
+    np.testing.assert_array_equal(anchors, np.array(res["anchors"]))
+    assert placement.on_surfaces(room, anchors).all()
+    assert res["cost_name"] == "variance" and res["nfev"] == 8
+    # the analytic seeds were placed in the swarm and scored with the simulated cost
+    assert [s["name"] for s in res["seeds"]][:1] == ["relax-A"]
+    assert all(s["cost"] > 0 for s in res["seeds"])
+    assert res["cost"] <= min(s["cost"] for s in res["seeds"])
+    v = res["validation"]
+    assert v["realizations"] == 2 and len(v["errors"]) == 2 and len(v["errors"][0]) == 270
+    assert abs(v["std"] - np.std(np.array(v["errors"]))) < 1e-5
+
+
+def test_plan_bad_input_exit_2(tmp_path, capsys):
+    assert main(["plan", "--anchors", "3", "--out", str(tmp_path)]) == 2
+    assert "M" in capsys.readouterr().err
+    assert main(["plan", "--particles", "1", "--out", str(tmp_path)]) == 2
+    assert "particles" in capsys.readouterr().err
