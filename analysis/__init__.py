@@ -7,6 +7,7 @@ from analysis.fim import crlb, crlb_trace, fim, gdop, peb
 from analysis.noise import (
     CalibratedRangeNoise,
     ConstantRangeNoise,
+    MultipathRangeNoise,
     PhysicalRangeNoise,
     calibrated_sigma,
     direct_amplitude,
@@ -23,6 +24,7 @@ from analysis.statistics import (
 __all__ = [
     "CalibratedRangeNoise",
     "ConstantRangeNoise",
+    "MultipathRangeNoise",
     "ErrorStats",
     "PhysicalRangeNoise",
     "axis_errors",

@@ -229,3 +229,38 @@ class CalibratedRangeNoise:
                 f"positions: calibrated per node for {self.values.shape[0]} nodes, got {p.shape[0]}"
             )
         return self.values
+
+
+@dataclass(frozen=True)
+class MultipathRangeNoise:
+    """σ_j(p) = √(σ0² + b_j(p)²) with b_j(p) the noise-free simulated range error.
+
+    The bias b comes from the full chirp simulation without noise (image sources, cardioid
+    speakers, the SPEC §2 receiver): it is the error that reverberation and the receiver
+    make deterministically at that anchor–node pair, which the Gaussian range model of the
+    CRLB ignores. Treating it as extra variance gives a multipath-aware FIM: pairs whose
+    range the receiver gets wrong carry little information. ``floor`` σ0 (m) stands for the
+    noise. Costs one noise-free simulation of every anchor–node pair.
+    """
+
+    room: Room = field(default_factory=Room.techtile)
+    floor: float = 0.04
+    snr_db: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.floor) and self.floor > 0):
+            raise ValueError(f"floor: must be > 0 m, got {self.floor}")
+
+    def bias(self, anchors, positions) -> np.ndarray:
+        """(P, M) noise-free simulated range minus true distance, metres."""
+        from simulation.evaluation import simulate_ranges
+
+        a = np.asarray(anchors, dtype=float)
+        p = np.asarray(positions, dtype=float)
+        r = simulate_ranges(self.room, a, p, noise=False, snr_db=self.snr_db)
+        return r - np.linalg.norm(p[:, None, :] - a[None, :, :], axis=-1)
+
+    def sigma(self, anchors, positions) -> np.ndarray:
+        """(P, M) σ in metres for anchors (M, 3) and positions (P, 3)."""
+        b = self.bias(anchors, positions)
+        return np.sqrt(self.floor**2 + b * b)

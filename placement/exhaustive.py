@@ -53,7 +53,8 @@ _BLOCK = 256
 class DesignInputs:
     """Validated inputs of a selection problem.
 
-    ``candidates`` (N, 3) m, ``nodes`` (P, 3) m, ``sigma`` (N,) m per candidate, and
+    ``candidates`` (N, 3) m, ``nodes`` (P, 3) m, ``sigma`` (N,) m per candidate or (N, P)
+    per candidate and node, and
     ``sigma_ref`` (m, their geometric mean): the solvers work with σ_n/σ_ref (σ
     normalized to 1, SPEC §4) and rescale the results.
     """
@@ -118,9 +119,12 @@ def design_inputs(
     s = np.asarray(sigma, dtype=float)
     if s.ndim == 0:
         s = np.full(N, float(s))
-    if s.shape != (N,):
+    if s.shape == (p.shape[0], N):
+        s = s.T  # per (node, candidate) pair, stored (N, P) like the FIM table
+    elif s.shape != (N,):
         raise ValueError(
-            f"sigma: expected a scalar or shape ({N},) (one per candidate), got {s.shape}"
+            f"sigma: expected a scalar, shape ({N},) (one per candidate) or "
+            f"({p.shape[0]}, {N}) (one per node and candidate), got {s.shape}"
         )
     if not (np.all(np.isfinite(s)) and np.all(s > 0)):
         raise ValueError("sigma: range standard deviations must be finite and > 0 m")
@@ -129,7 +133,9 @@ def design_inputs(
 
 # -- the FIM table and the criteria -----------------------------------------------------------
 def fim_table(candidates, nodes, sigma=1.0) -> np.ndarray:
-    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_n² (SPEC §3).
+    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_pn² (SPEC §3).
+
+    ``sigma`` is a scalar, per candidate (N,), or per candidate and node (N, P).
 
     u is the unit vector from candidate n to node p; a node on a candidate carries no
     information (G = 0), as in :func:`analysis.fim`.
@@ -138,7 +144,8 @@ def fim_table(candidates, nodes, sigma=1.0) -> np.ndarray:
     p = np.asarray(nodes, dtype=float)
     d = p[None, :, :] - a[:, None, :]  # (N, P, 3)
     d2 = np.einsum("npk,npk->np", d, d)
-    w = np.broadcast_to(1.0 / np.asarray(sigma, dtype=float) ** 2, (a.shape[0],))[:, None]
+    w = 1.0 / np.asarray(sigma, dtype=float) ** 2
+    w = w[:, None] if w.ndim == 1 else np.broadcast_to(w, d2.shape)  # (N,) or (N, P)
     s = np.divide(w, d2, out=np.zeros_like(d2), where=d2 > 0)
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
     return np.stack([s * x * x, s * y * y, s * z * z, s * x * y, s * x * z, s * y * z])

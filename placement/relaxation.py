@@ -411,7 +411,8 @@ def relax_select(
     candidates : (N, 3) points on the allowed surfaces (m); default
         ``candidate_grid(room, spacing)`` (``spacing`` = 0.75 m: 204 points in techtile).
     criterion : "A" (mean tr J⁻¹), "D" (Σ log det J, maximized) or "minimax" (worst tr J⁻¹).
-    sigma : range standard deviation (m), scalar or per candidate (N,).
+    sigma : range standard deviation (m), scalar, per candidate (N,) or per node and
+        candidate (P, N) (e.g. :class:`analysis.MultipathRangeNoise`).
     nodes : (P, 3) evaluation nodes (m); default ``room.grid()`` (270 nodes).
     seed : seed or ``numpy.random.Generator`` for the rounding.
     samples, starts : subsets drawn ∝ weights; how many of the best get local search.

@@ -70,3 +70,22 @@ def test_dop_and_axis_errors():
     truth = np.zeros((P, 3))
     np.testing.assert_allclose(analysis.axis_errors(pos, truth), np.abs(pos))
     np.testing.assert_allclose(analysis.euclidean_errors(pos, truth), e)
+
+
+def test_multipath_sigma_is_floor_plus_simulated_bias():
+    from simulation import simulate_ranges
+
+    room = Room.techtile()
+    anchors = room.corners_layout()
+    nodes = room.grid()[::27]
+    model = analysis.MultipathRangeNoise(room, floor=0.04)
+    s = model.sigma(anchors, nodes)
+    assert s.shape == (len(nodes), 4)
+    r = simulate_ranges(room, anchors, nodes, noise=False)
+    d = np.linalg.norm(nodes[:, None] - anchors[None], axis=-1)
+    np.testing.assert_allclose(s, np.sqrt(0.04**2 + (r - d) ** 2))
+    assert np.all(s >= 0.04)
+    # usable as a per-pair sigma in the bound
+    assert np.all(np.isfinite(analysis.peb(anchors, nodes, s)))
+    with pytest.raises(ValueError, match="floor"):
+        analysis.MultipathRangeNoise(room, floor=0.0)

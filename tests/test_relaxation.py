@@ -191,3 +191,21 @@ def test_bad_input():
         placement.relax_select(room, 4, candidates=cand, criterion="E")
     with pytest.raises(ValueError, match="nodes"):
         placement.relax_select(room, 4, candidates=cand, nodes=np.full((3, 3), np.nan))
+
+
+def test_per_pair_sigma_equals_per_candidate_sigma_when_constant_over_nodes():
+    from placement import candidate_grid, relax_select
+
+    room = Room.techtile()
+    cand = candidate_grid(room, 1.5)
+    nodes = room.grid()[::5]
+    rng = np.random.default_rng(0)
+    s_n = rng.uniform(0.02, 0.08, size=len(cand))
+    a = relax_select(room, 4, candidates=cand, sigma=s_n, nodes=nodes, seed=1)
+    b = relax_select(
+        room, 4, candidates=cand, sigma=np.tile(s_n, (len(nodes), 1)), nodes=nodes, seed=1
+    )
+    assert sorted(a.indices) == sorted(b.indices)
+    assert a.value == pytest.approx(b.value, rel=1e-9)
+    with pytest.raises(ValueError, match="sigma"):
+        relax_select(room, 4, candidates=cand, sigma=np.ones((3, len(cand))), nodes=nodes)
