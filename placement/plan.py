@@ -21,6 +21,7 @@ import numpy as np
 from analysis.fim import peb
 from placement.costs import cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
+from placement.serialization import to_jsonable
 from placement.surfaces import random_layout
 from simulation.room import Room
 
@@ -105,19 +106,7 @@ class PlacementResult:
 
     def to_json(self, **kw) -> str:
         """Strict JSON (non-finite numbers become null)."""
-        return json.dumps(_finite(self.to_dict()), **kw)
-
-
-def _finite(obj):
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, np.generic):
-        return _finite(obj.item())
-    return obj
+        return json.dumps(to_jsonable(self.to_dict()), **kw)
 
 
 def analytic_seeds(

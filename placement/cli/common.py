@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from placement.serialization import to_jsonable
 from simulation.room import Room
+
+__all__ = ["add_room_argument", "load_layout", "load_room", "to_jsonable", "write_json"]
 
 
 def add_room_argument(parser) -> None:
@@ -39,21 +41,6 @@ def load_layout(path: str, room: Room, min_anchors: int = 4) -> np.ndarray:
     except (TypeError, ValueError):
         raise ValueError(f"--layout {path}: anchors must be a list of [x, y, z] numbers") from None
     return room.check_anchors(anchors, min_anchors=min_anchors)
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Numpy arrays and scalars to lists and floats; non-finite floats to None (strict JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, np.generic):
-        return to_jsonable(obj.item())
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
 
 
 def write_json(path: str | Path, obj: Any) -> Path:
