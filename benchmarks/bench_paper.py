@@ -56,6 +56,7 @@ from analysis.fim import peb  # noqa: E402
 from placement.costs import make_cost  # noqa: E402
 from placement.plan import seed_then_pso  # noqa: E402
 from placement.pso import PSOOptions, evaluate_swarm  # noqa: E402
+from placement.serialization import to_jsonable  # noqa: E402
 from placement.surfaces import random_layout  # noqa: E402
 from simulation import Room, evaluate_layout  # noqa: E402
 
@@ -81,21 +82,6 @@ COLORS = {"corners": "#E69F00", "pso": "#0072B2", "stp": "#009E73", "peb": "#D55
 
 
 # -- output --------------------------------------------------------------------------------
-def _finite(obj):
-    """JSON-safe copy: numpy scalars/arrays to Python, non-finite floats to None."""
-    if isinstance(obj, dict):
-        return {str(k): _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_finite(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _finite(obj.tolist())
-    if isinstance(obj, np.generic):
-        return _finite(obj.item())
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
 class Recorder:
     """``emit`` to stdout and append the same line to OUT/results.jsonl."""
 
@@ -107,7 +93,7 @@ class Recorder:
     def __call__(self, name: str, **fields) -> None:
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf):
-            emit(name, **_finite(fields))
+            emit(name, **to_jsonable(fields))
         line = buf.getvalue()
         print(line, end="", flush=True)
         with open(self.path, "a") as fh:
@@ -571,7 +557,7 @@ def main() -> None:
         L = json.loads(layouts_path.read_text())
 
     def store(k, entry):
-        L[k] = _finite(entry)
+        L[k] = to_jsonable(entry)
         layouts_path.write_text(json.dumps(L, indent=1))
 
     executor = ProcessPoolExecutor(args.workers) if args.workers > 1 else None

@@ -14,6 +14,7 @@ how realizations are chunked.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -172,7 +173,7 @@ class Evaluation:
     def realizations(self) -> int:
         return self.errors.shape[0]
 
-    @property
+    @functools.cached_property
     def stats(self) -> dict:
         """std, mean, p95, rms, median, max over all R·P Euclidean errors."""
         return _stats(self.errors)
