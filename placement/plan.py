@@ -1,7 +1,9 @@
-"""The whole chain (SPEC §4): analytic seeds → PSO on the simulated cost → validation.
+"""The whole chain (SPEC §4): seeds → PSO on the simulated cost → validation.
 
-``seed_then_pso(room, M=8)`` screens layouts with the bound (A- and D-optimal convex
-relaxations, their gradient refinements, the best of many random layouts), puts them into
+``seed_then_pso(room, M=8)`` builds seed layouts in two ways: simulation-driven, a local
+search over candidate mounting points on a table of simulated ranges
+(:mod:`placement.simselect`), and bound-driven, the A- and D-optimal convex relaxations,
+their gradient refinements and the best of many random layouts by PEB. It puts them into
 the swarm beside random particles, runs the swarm on the full chirp simulation, and
 validates the winner with many noise realizations.
 """
@@ -19,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from placement.costs import cost_name, make_cost
+from placement.costs import SimulatedCost, cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.serialization import to_jsonable
 from placement.surfaces import random_layout
@@ -29,17 +31,21 @@ logger = logging.getLogger(__name__)
 
 #: random layouts screened by mean PEB for the "auto" seeds, and how many are kept
 RANDOM_SCREEN, RANDOM_KEEP = 512, 2
+#: local optima of the simulation-driven candidate search kept as "auto" seeds
+SIMULATED_KEEP = 3
 
 
 @dataclass
 class SeedLayout:
-    """A seed layout: where it came from, its anchors, mean PEB (m, σ = 0.04 m) and the
-    cost it scored in the swarm's first iteration."""
+    """A seed layout: where it came from, its anchors, mean PEB (m, σ = 0.04 m), the cost
+    it scored in the swarm's first iteration and, for simulation-driven seeds, its cost on
+    the range table of :func:`placement.simselect.simulated_select`."""
 
     name: str
     anchors: np.ndarray
     mean_peb: float
     cost: float = math.nan
+    table_cost: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -47,6 +53,7 @@ class SeedLayout:
             "anchors": np.asarray(self.anchors).tolist(),
             "mean_peb": self.mean_peb,
             "cost": self.cost,
+            "table_cost": self.table_cost,
         }
 
 
@@ -145,6 +152,49 @@ def analytic_seeds(
     return out
 
 
+def simulated_seeds(
+    room: Room,
+    M: int,
+    *,
+    statistic: str = "variance",
+    sigma: float = 0.04,
+    nodes=None,
+    seed: int | None = None,
+    executor: Executor | None = None,
+    keep: int = SIMULATED_KEEP,
+    **search,
+) -> tuple[list[SeedLayout], dict[str, Any]]:
+    """The simulation-driven "auto" seeds: the ``keep`` best local optima of
+    :func:`placement.simselect.simulated_select` (``search``: its keyword arguments), and
+    that search's summary (evaluations, table size, timings). A failure is logged and
+    gives no seeds."""
+    from placement.simselect import simulated_select
+
+    nodes = room.grid() if nodes is None else nodes
+    try:
+        sel = simulated_select(
+            room, M, statistic=statistic, seed=seed, nodes=nodes, executor=executor, **search
+        )
+    except ValueError:  # bad arguments are the caller's to fix
+        raise
+    except Exception as exc:  # noqa: BLE001 - the bound-driven seeds remain
+        logger.warning("simulated seeds failed: %s", exc)
+        return [], {"message": f"{type(exc).__name__}: {exc}"}
+    out = [
+        SeedLayout(
+            f"simulated-{k + 1}",
+            a,
+            float(np.mean(peb(a, nodes, sigma))),
+            table_cost=c,
+        )
+        for k, (a, (_, c)) in enumerate(zip(sel.layouts(keep), sel.optima, strict=False))
+        if math.isfinite(c)
+    ]
+    summary = sel.to_dict()
+    del summary["anchors"], summary["optima"]
+    return out, summary
+
+
 def validate_layout(
     room: Room, anchors, realizations: int, seed: int, sigma: float = 0.04, nodes=None
 ) -> dict[str, Any]:
@@ -187,14 +237,17 @@ def seed_then_pso(
     options: PSOOptions | None = None,
     sigma: float = 0.04,
     nodes=None,
+    search: dict[str, Any] | None = None,
 ) -> PlacementResult:
     """Plan M anchors: analytic seeds → PSO on ``cost`` → validation (SPEC §4).
 
     cost : "variance" (paper), "mean", "p95", "rms" of the simulated Euclidean error with
         ``realizations`` noise realizations per evaluation; "peb" (mean PEB); or a callable
         ``f(anchors)`` / ``f(anchors, rng)``.
-    seeds : "auto" (A-/D-optimal relaxations, their refinements, best random layouts),
-        None for an unseeded swarm, or an array of seed layouts (S, M, 3).
+    seeds : "auto" (for a simulated cost: the best layouts of a simulation-driven search
+        over candidate points, :func:`simulated_seeds`; then A-/D-optimal relaxations,
+        their refinements, best random layouts by PEB), None for an unseeded swarm, or an
+        array of seed layouts (S, M, 3).
     executor : a ``concurrent.futures.Executor`` (``ProcessPoolExecutor``, or a Dask
         ``Client.get_executor()``) for the particle evaluations.
     seed : makes the whole run reproducible (same result serially or in parallel).
@@ -202,6 +255,9 @@ def seed_then_pso(
         arguments resumes from it.
     validate_realizations : noise realizations used to validate the best layout (0: skip).
     options : further swarm settings; ``particles`` and ``iterations`` override its fields.
+    search : keyword arguments of the simulation-driven seed search
+        (:func:`placement.simselect.simulated_select`: ``spacing``, ``realizations``,
+        ``starts``, ...; ``{"starts": 0}`` skips it) and ``keep``, the optima kept as seeds.
     """
     room = Room.techtile() if room is None else room
     if int(M) != M or M < 4:
@@ -217,12 +273,28 @@ def seed_then_pso(
     entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
     cost_fn = make_cost(cost, room, realizations=realizations, nodes=nodes, sigma=sigma)
     timings: dict[str, float] = {}
+    seed_search: dict[str, Any] = {}
 
     t0 = time.perf_counter()
     if isinstance(seeds, str):
         if seeds != "auto":
             raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
-        seed_layouts = analytic_seeds(room, M, sigma=sigma, nodes=nodes, seed=entropy)
+        seed_layouts = []
+        search = dict(search or {})
+        if isinstance(cost_fn, SimulatedCost) and search.get("starts", 1) > 0:
+            seed_layouts, summary = simulated_seeds(
+                room,
+                M,
+                statistic=cost_fn.statistic,
+                sigma=sigma,
+                nodes=nodes,
+                seed=entropy,
+                executor=executor,
+                **search,
+            )
+            timings.update({f"seeding_{k}": v for k, v in summary.pop("timings", {}).items()})
+            seed_search = summary
+        seed_layouts += analytic_seeds(room, M, sigma=sigma, nodes=nodes, seed=entropy)
     elif seeds is None:
         seed_layouts = []
     else:
@@ -289,6 +361,7 @@ def seed_then_pso(
             "cost": cost_name(cost),
             "realizations": int(realizations),
             "seeds": "auto" if isinstance(seeds, str) else ("none" if seeds is None else "user"),
+            "seed_search": seed_search,
             "seed": entropy,
             "validate_realizations": int(validate_realizations),
             "sigma": sigma,

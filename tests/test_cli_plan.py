@@ -22,6 +22,14 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
         "--no-progress",
         "--seed",
         "3",
+        "--search-starts",
+        "1",
+        "--search-realizations",
+        "1",
+        "--search-spacing",
+        "2.0",
+        "--workers",
+        "1",
         "--out",
         str(out),
     ]
@@ -35,8 +43,10 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
     np.testing.assert_array_equal(anchors, np.array(res["anchors"]))
     assert placement.on_surfaces(room, anchors).all()
     assert res["cost_name"] == "variance" and res["nfev"] == 8
-    # the analytic seeds were placed in the swarm and scored with the simulated cost
-    assert [s["name"] for s in res["seeds"]][:1] == ["relax-A"]
+    # the simulation-driven seeds come first, then the analytic ones (at most particles // 2);
+    # all were placed in the swarm and scored with the simulated cost
+    assert [s["name"] for s in res["seeds"]] == ["simulated-1", "relax-A"]
+    assert res["settings"]["seed_search"]["nfev"] > 0
     assert all(s["cost"] > 0 for s in res["seeds"])
     assert res["cost"] <= min(s["cost"] for s in res["seeds"])
     v = res["validation"]

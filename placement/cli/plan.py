@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import time
 from pathlib import Path
 
@@ -13,10 +14,11 @@ from placement.costs import COST_NAMES
 def register(sub) -> None:
     p = sub.add_parser(
         "plan",
-        help="optimize an anchor layout (analytic seeds + PSO on the full simulation)",
-        description="Plan where to mount M anchors: analytic seeds (convex relaxation and "
-        "PEB refinement), particle swarm optimization on the simulated positioning error, "
-        "and validation of the best layout. Writes result.json and layout.json to --out.",
+        help="optimize an anchor layout (seeds + PSO on the full simulation)",
+        description="Plan where to mount M anchors: seeds (a simulation-driven search over "
+        "candidate points, convex relaxation and PEB refinement), particle swarm "
+        "optimization on the simulated positioning error, and validation of the best "
+        "layout. Writes result.json and layout.json to --out.",
     )
     p.add_argument("--anchors", "-M", type=int, default=8, help="number of anchors M (8)")
     add_room_argument(p)
@@ -33,8 +35,31 @@ def register(sub) -> None:
         help="realizations to validate the best layout (100)",
     )
     p.add_argument("--no-seeds", action="store_true", help="unseeded swarm (paper's setting)")
+    p.add_argument(
+        "--search-starts",
+        type=int,
+        default=8,
+        help="local searches of the simulation-driven seed search (8; 0: skip it)",
+    )
+    p.add_argument(
+        "--search-realizations",
+        type=int,
+        default=3,
+        help="noise realizations in the seed search's range table (3)",
+    )
+    p.add_argument(
+        "--search-spacing",
+        type=float,
+        default=0.6,
+        help="spacing of the seed search's candidate points in m (0.6)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes (1)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        help="local worker processes (0: one per available core)",
+    )
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://...)")
     p.add_argument("--checkpoint", metavar="PATH", help="checkpoint file; resumes if present")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -43,7 +68,7 @@ def register(sub) -> None:
 
 
 def _executor(args, stack: contextlib.ExitStack):
-    if args.scheduler and args.workers > 1:
+    if args.scheduler and args.workers > 0:
         raise ValueError("--scheduler and --workers: choose one")
     if args.scheduler:
         try:
@@ -52,13 +77,22 @@ def _executor(args, stack: contextlib.ExitStack):
             raise ValueError("--scheduler needs dask: pip install 'anchorplan[dask]'") from None
         client = stack.enter_context(Client(args.scheduler))
         return client.get_executor()
-    if args.workers < 1:
-        raise ValueError(f"--workers: must be >= 1, got {args.workers}")
-    if args.workers > 1:
+    if args.workers < 0:
+        raise ValueError(f"--workers: must be >= 0 (0: one per core), got {args.workers}")
+    workers = args.workers or available_cores()
+    if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
-        return stack.enter_context(ProcessPoolExecutor(max_workers=args.workers))
+        return stack.enter_context(ProcessPoolExecutor(max_workers=workers))
     return None
+
+
+def available_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        return os.cpu_count() or 1
 
 
 def run(args) -> int:
@@ -83,6 +117,11 @@ def run(args) -> int:
             cost=args.cost,
             realizations=args.realizations,
             seeds=None if args.no_seeds else "auto",
+            search={
+                "starts": args.search_starts,
+                "realizations": args.search_realizations,
+                "spacing": args.search_spacing,
+            },
             executor=executor,
             seed=args.seed,
             progress=not args.no_progress,
