@@ -9,7 +9,8 @@ a. Four anchors, corners versus optimized (paper §V-A): σ / mean / P95 of the 
    maps, error CDFs (Euclidean, |x|, |y|, |z|) and the PSO evolution (PEB at t = 1, mid, end).
 b. Table I (paper §V-B): for each M, paper-settings PSO (``seeds=None``: 15 particles,
    area-proportional random start, ≤ ``--iterations``, stop on small improvement) and
-   ``seed_then_pso`` (analytic seeds), validated with ``--realizations`` (≥ 100): σ, mean,
+   ``seed_then_pso`` (its "auto" seeds; ``--search-starts 0``: analytic seeds only),
+   validated with ``--realizations`` (≥ 100): σ, mean,
    P95 beside the paper's values; error CDFs and layout views.
 c. Bound-driven versus simulation-driven: for each M, the PEB-optimal layout
    (``relax_select`` A-optimal + ``refine_peb``), the PSO layout and the ``seed_then_pso``
@@ -190,6 +191,8 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
     ckpt = None
     if ckpt_dir is not None:
         tag = f"p{args.particles}_i{iters}_tol{options.tol:g}_pat{options.patience}"
+        if method == "stp" and args.search_starts != 0:
+            tag += f"_search{args.search_starts}"
         ckpt = ckpt_dir / f"{method}_M{M}_s{seed}_{tag}.json"
     t0 = time.perf_counter()
     res = seed_then_pso(
@@ -200,6 +203,7 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
         cost="variance",
         realizations=args.pso_realizations,
         seeds=None if method == "pso" else "auto",
+        search={"starts": args.search_starts},
         executor=executor,
         seed=seed,
         progress=False,
@@ -502,6 +506,12 @@ def parse_args():
     )
     ap.add_argument("--patience", type=int, default=None, help="default: PSOOptions()")
     ap.add_argument("--pso-realizations", type=int, default=1, help="per cost evaluation")
+    ap.add_argument(
+        "--search-starts",
+        type=int,
+        default=8,
+        help="starts of seed_then_pso's simulation-driven seed search (0: analytic seeds only)",
+    )
     ap.add_argument("--realizations", type=int, default=100, help="validation R (b, c)")
     ap.add_argument("--corner-realizations", type=int, default=500, help="R of section a")
     ap.add_argument("--validation-seed", type=int, default=2023, help="same for every layout")

@@ -7,7 +7,8 @@ realizations with M = 4 in ≤ 2 minutes on 2 cores, peak memory < 2 GB.
 
 Figures:
 - ``stage_*``: the pieces of one M = 4 layout (paths, window synthesis before/after the
-  factorized form, noise σ, DSP before (the literal per-window chain) and after, LS).
+  factorized form, noise σ, DSP before (the literal per-window chain) and after, on one
+  and two threads, LS).
 - ``layout_time``: ``evaluate_layout(room, anchors, realizations=1)`` for M = 4 (corners)
   and M = 8 (a random layout), float64 (the reference) and float32 DSP.
 - ``pra_pipeline``: pyroomacoustics windows for the same 270 × 4 pairs (1 MHz RIRs,
@@ -27,6 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import scipy.fft
 from _common import best_time, emit
 
 from placement import random_layout
@@ -72,6 +74,8 @@ def stages(room, anchors, repeat):
     w = scene.noisy_windows(np.random.default_rng(0)).reshape(-1, rx.window)
     dsp = dsp_for()
     t_dsp = best_time(lambda: dsp.indices(w), repeat=repeat)
+    with scipy.fft.set_workers(2):
+        t_dsp2 = best_time(lambda: dsp.indices(w), repeat=repeat)
     t_corr = best_time(lambda: dsp.correlation(w), repeat=repeat)
     curve = dsp.correlation(w)
     t_lp = best_time(lambda: dsp.lowpass(curve), repeat=repeat)
@@ -81,6 +85,7 @@ def stages(room, anchors, repeat):
         "stage_dsp",
         windows=len(w),
         seconds=t_dsp,
+        seconds_2_threads=t_dsp2,
         correlation_seconds=t_corr,
         lowpass_seconds=t_lp,
         before_seconds_literal_chain=t_ref * len(w),

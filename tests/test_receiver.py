@@ -1,7 +1,11 @@
 import numpy as np
 import pytest
+import scipy.fft
+import scipy.linalg
+import scipy.signal
 
 from simulation import Chirp, Receiver, Room
+from simulation.evaluation import RangingScene
 from simulation.multipath import compute_paths
 from simulation.noise import noise_sigma
 from simulation.received import received_windows, synthesize, synthesize_direct
@@ -68,6 +72,66 @@ def test_fast_dsp_gives_the_reference_index():
         )
     # blocking does not change anything
     assert np.array_equal(dsp.indices(w, block=7), k)
+
+
+def _matrix_form_indices(w):
+    """Steps 1–2 as one (Nc, N) matrix built here from scratch, full-rate low-pass argmax:
+    the chain in plain chunks, without the DSP's parts, blocks and threads."""
+    ref = CH.samples(RX.fs)
+    N = RX.window
+    H = scipy.signal.sosfiltfilt(RX.highpass_sos(), np.eye(N), axis=0)
+    T = scipy.linalg.toeplitz(np.r_[ref, np.zeros(N - 1)], np.zeros(N))  # T[k, m] = ref[k − m]
+    G = (T @ H[::-1]).T
+    dsp = dsp_for()
+    out = []
+    for part in np.array_split(w, -(-len(w) // 256)):
+        curve = np.abs(part @ G)
+        out.append(snap_to_peak(curve, np.argmax(dsp.lowpass(curve), axis=1), dsp.snap_width))
+    return np.concatenate(out)
+
+
+def _two_lobe_windows(rng, n):
+    """Two paths of nearly equal amplitude (competing low-pass lobes), some with noise."""
+    d1 = rng.uniform(0.5, 9.0, n)
+    d2 = np.clip(d1 + rng.uniform(0.05, 4.0, n) * rng.choice([-1, 1], n), 0.1, 9.9)
+    amp = np.stack([np.ones(n), 1 + 0.02 * rng.standard_normal(n)], axis=1)
+    w = synthesize(np.stack([d1, d2], axis=1) / C, amp, CH, RX)
+    level = rng.choice([0.0, 0.03, 0.3], n)[:, None] * np.abs(w).max(axis=1, keepdims=True)
+    return w + level * rng.standard_normal(w.shape)
+
+
+def test_dsp_gives_the_matrix_form_and_reference_index_on_simulated_scenes():
+    """Several thousand reverberant windows, clean and noisy, from two layouts on the
+    270-node grid: the parted, blocked, threaded DSP gives the index of the one-matrix form
+    computed independently here, and of the literal chain on a sample."""
+    rng = np.random.default_rng(2024)
+    room = Room.techtile()
+    parts = []
+    inside = rng.uniform(0.03, np.array(room.size) - 0.03, (8, 3))  # 8 anchors anywhere
+    for anchors, n_noisy in ((room.corners_layout(), 2), (inside, 1)):
+        scene = RangingScene(room, anchors)
+        parts.append(scene.windows.reshape(-1, RX.window)[::2])
+        parts += [scene.noisy_windows(rng).reshape(-1, RX.window) for _ in range(n_noisy)]
+    w = np.concatenate(parts)
+    assert len(w) > 4000
+    dsp = dsp_for()
+    k = dsp.indices(w)
+    assert np.array_equal(k, _matrix_form_indices(w))
+    sub = rng.choice(len(w), 1500, replace=False)
+    with scipy.fft.set_workers(2):  # blocks on two threads, another block size: same result
+        assert np.array_equal(dsp.indices(w[sub], block=100), k[sub])
+    for i in sub[:40]:
+        assert k[i] == reference_chain(w[i])["k"]
+
+
+def test_dsp_with_competing_lobes():
+    """Two paths of nearly equal amplitude (two low-pass lobes of nearly equal height): the
+    DSP still gives the one-matrix form's index."""
+    w = _two_lobe_windows(np.random.default_rng(5), 1500)
+    dsp = dsp_for()
+    assert np.array_equal(dsp.indices(w), _matrix_form_indices(w))
+    with pytest.raises(ValueError, match="block"):
+        dsp.indices(w, block=0)
 
 
 def test_float32_dsp_agrees_almost_always():
