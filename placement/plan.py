@@ -62,7 +62,7 @@ class PlacementResult:
     """Result of :func:`seed_then_pso`.
 
     anchors (M, 3) the best layout; cost its (noisy) PSO cost; history the best cost per
-    iteration (non-increasing); seeds the analytic seed layouts with their costs;
+    iteration (non-increasing); seeds the seed layouts with their costs;
     validation the statistics of the best layout over ``validate_realizations`` noise
     realizations (σ, mean, P95, RMS of the Euclidean error in m; mean PEB in m with
     σ_r = 0.04 m, PEB = √tr J⁻¹); timings in seconds.
@@ -239,7 +239,7 @@ def seed_then_pso(
     nodes=None,
     search: dict[str, Any] | None = None,
 ) -> PlacementResult:
-    """Plan M anchors: analytic seeds → PSO on ``cost`` → validation (SPEC §4).
+    """Plan M anchors: seeds → PSO on ``cost`` → validation (SPEC §4).
 
     cost : "variance" (paper), "mean", "p95", "rms" of the simulated Euclidean error with
         ``realizations`` noise realizations per evaluation; "peb" (mean PEB); or a callable
