@@ -22,17 +22,11 @@ import numpy as np
 from _common import emit
 
 from placement.plan import seed_then_pso
+from placement.pso import nfev_to_reach
 from placement.serialization import to_jsonable
 from simulation import Room
 
 SWARMS = {"unseeded": None, "seeded": "auto"}
-
-
-def nfev_to_reach(costs: list[list[float]], target: float) -> int | None:
-    """Evaluations until some evaluated cost is ≤ target, in evaluation order (None: never)."""
-    flat = np.asarray(costs, dtype=float).ravel()
-    hit = np.flatnonzero(flat <= target)
-    return int(hit[0]) + 1 if hit.size else None
 
 
 def run(room, M, seed, swarm, args, ex) -> dict:

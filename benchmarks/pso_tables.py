@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from bench_pso import nfev_to_reach
+from placement.pso import nfev_to_reach
 
 
 def main(folder: str) -> None:

@@ -111,9 +111,7 @@ class PSOResult:
 
     def nfev_to_reach(self, target: float) -> int | None:
         """Evaluations needed until some evaluated cost is ≤ ``target`` (None if never)."""
-        flat = np.asarray(self.costs, dtype=float).ravel()
-        hit = np.flatnonzero(flat <= target)
-        return int(hit[0]) + 1 if hit.size else None
+        return nfev_to_reach(self.costs, target)
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -121,6 +119,14 @@ class PSOResult:
         d["best_anchors_history"] = [np.asarray(a).tolist() for a in self.best_anchors_history]
         d["costs"] = np.asarray(self.costs).tolist()
         return d
+
+
+def nfev_to_reach(costs, target: float) -> int | None:
+    """Evaluations, in evaluation order, until a cost of ``costs`` (T, K) is ≤ ``target``
+    (None if never)."""
+    flat = np.asarray(costs, dtype=float).ravel()
+    hit = np.flatnonzero(flat <= target)
+    return int(hit[0]) + 1 if hit.size else None
 
 
 def evaluation_rng(seed: int, iteration: int, particle: int) -> np.random.Generator:
