@@ -3,8 +3,8 @@
 For each M and seed, runs ``seed_then_pso`` unseeded (the paper's random swarm) and seeded
 ("auto": simulation-driven candidate search, relaxations + refinements, best random
 layouts) with the same evaluation noise streams, and reports the evaluations the seeded run
-needed to reach the unseeded run's final cost, and both final layouts' validated σ / mean /
-P95. Each run is saved to ``DIR/M{M}_s{seed}_{swarm}.json`` (costs of every evaluation,
+needed to reach the unseeded run's final best cost, and both chosen layouts' validated σ /
+mean / P95. Each run is saved to ``DIR/M{M}_s{seed}_{swarm}.json`` (costs of every evaluation,
 history, validation, timings); runs already saved are read back instead of rerun (unless
 ``--force``), so the unseeded and seeded halves can run at different times.
 
@@ -56,6 +56,7 @@ def run(room, M, seed, swarm, args, ex) -> dict:
         "costs": np.asarray(res.pso.costs).tolist(),
         "validation": v,
         "seeds": [s.to_dict() for s in res.seeds],
+        "finalists": [{k: f[k] for k in ("pso_cost", "cost")} for f in res.finalists],
         "seed_search": res.settings.get("seed_search", {}),
         "timings": res.timings,
         "seconds": time.perf_counter() - t0,
@@ -104,7 +105,7 @@ def main() -> None:
                 if len(runs) < 2:
                     continue
                 u, s = runs["unseeded"], runs["seeded"]
-                target = u["cost"]
+                target = u["history"][-1]  # the swarm's final best cost
                 base = nfev_to_reach(u["costs"], target)
                 need = nfev_to_reach(s["costs"], target)
                 emit(

@@ -10,6 +10,7 @@ validates the winner with many noise realizations.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -61,9 +62,11 @@ class SeedLayout:
 class PlacementResult:
     """Result of :func:`seed_then_pso`.
 
-    anchors (M, 3) the best layout; cost its (noisy) PSO cost; history the best cost per
-    iteration (non-increasing); seeds the seed layouts with their costs;
-    validation the statistics of the best layout over ``validate_realizations`` noise
+    anchors (M, 3) the chosen layout; cost its (noisy) PSO cost; history the swarm's best
+    cost per iteration (non-increasing); finalists the best distinct particle layouts with
+    their PSO cost and their re-scored cost (the chosen one has the lowest re-scored cost,
+    see :func:`seed_then_pso`); seeds the seed layouts with their costs; validation the
+    statistics of the best layout over ``validate_realizations`` noise
     realizations (σ, mean, P95, RMS of the Euclidean error in m; mean PEB in m with
     σ_r = 0.04 m, PEB = √tr J⁻¹); timings in seconds.
     """
@@ -83,6 +86,7 @@ class PlacementResult:
     timings: dict[str, float]
     settings: dict[str, Any]
     pso: PSOResult | None = field(default=None, repr=False)
+    finalists: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def x(self) -> np.ndarray:
@@ -105,6 +109,7 @@ class PlacementResult:
             "message": self.message,
             "success": self.success,
             "seeds": [s.to_dict() for s in self.seeds],
+            "finalists": self.finalists,
             "validation": self.validation,
             "timings": self.timings,
             "settings": self.settings,
@@ -219,6 +224,50 @@ def validate_layout(
     }
 
 
+def _rescore(cost: SimulatedCost, anchors: np.ndarray, seed: int) -> float:
+    return float(cost(anchors, np.random.default_rng(seed)))
+
+
+def rescore_finalists(
+    res: PSOResult,
+    cost: SimulatedCost,
+    count: int,
+    realizations: int,
+    seed: int,
+    executor: Executor | None = None,
+) -> list[dict[str, Any]]:
+    """Re-score the ``count`` best distinct particle layouts (by PSO cost) with
+    ``realizations`` noise realizations each, all on the same noise draws (``seed``).
+
+    The swarm ranks layouts by single noisy evaluations, so its best is partly the
+    luckiest draw; a less noisy comparison on common draws picks the better layout.
+    Returns one dict per finalist (anchors, pso_cost, cost), in PSO-cost order.
+    """
+    order = np.argsort(res.pcost, kind="stable")
+    picked: list[int] = []
+    for i in order:
+        if len(picked) == count or not math.isfinite(res.pcost[i]):
+            break
+        if not any(np.allclose(res.pbest[i], res.pbest[j]) for j in picked):
+            picked.append(int(i))
+    scorer = dataclasses.replace(cost, realizations=int(realizations))
+    if executor is None:
+        values = [_rescore(scorer, res.pbest[i], seed) for i in picked]
+    else:
+        futures = [executor.submit(_rescore, scorer, res.pbest[i], seed) for i in picked]
+        values = []
+        for f in futures:
+            try:
+                values.append(f.result())
+            except Exception as exc:  # noqa: BLE001 - a failed re-score only drops a finalist
+                logger.warning("re-scoring a finalist failed: %s", exc)
+                values.append(math.inf)
+    return [
+        {"anchors": res.pbest[i].copy(), "pso_cost": float(res.pcost[i]), "cost": v}
+        for i, v in zip(picked, values, strict=True)
+    ]
+
+
 def seed_then_pso(
     room: Room | None = None,
     M: int = 8,
@@ -238,6 +287,8 @@ def seed_then_pso(
     sigma: float = 0.04,
     nodes=None,
     search: dict[str, Any] | None = None,
+    finalists: int = 4,
+    finalist_realizations: int = 10,
 ) -> PlacementResult:
     """Plan M anchors: seeds → PSO on ``cost`` → validation (SPEC §4).
 
@@ -258,10 +309,17 @@ def seed_then_pso(
     search : keyword arguments of the simulation-driven seed search
         (:func:`placement.simselect.simulated_select`: ``spacing``, ``realizations``,
         ``starts``, ...; ``{"starts": 0}`` skips it) and ``keep``, the optima kept as seeds.
+    finalists, finalist_realizations : for a simulated cost, the ``finalists`` best
+        distinct particle layouts are re-scored with ``finalist_realizations`` common
+        noise realizations and the lowest wins (:func:`rescore_finalists`); 1: the
+        swarm's best as it is. Validation then uses independent noise.
     """
     room = Room.techtile() if room is None else room
     if int(M) != M or M < 4:
         raise ValueError(f"M: need an integer number of anchors >= 4 for 3D positioning, got {M}")
+    for name, value in (("finalists", finalists), ("finalist_realizations", finalist_realizations)):
+        if int(value) != value or value < 1:
+            raise ValueError(f"{name}: must be an integer >= 1, got {value}")
     if int(validate_realizations) != validate_realizations or validate_realizations < 0:
         raise ValueError(
             f"validate_realizations: must be an integer >= 0, got {validate_realizations}"
@@ -331,19 +389,31 @@ def seed_then_pso(
         s.cost = float(res.costs[0][i])
 
     t2 = time.perf_counter()
+    anchors, chosen_cost, final = res.anchors, res.cost, []
+    if finalists > 1 and isinstance(cost_fn, SimulatedCost) and res.success:
+        fseed = int(np.random.SeedSequence(entropy, spawn_key=(5,)).generate_state(1)[0])
+        final = rescore_finalists(
+            res, cost_fn, int(finalists), int(finalist_realizations), fseed, executor
+        )
+        best = min(final, key=lambda f: f["cost"])
+        if math.isfinite(best["cost"]):
+            anchors, chosen_cost = best["anchors"], best["pso_cost"]
+        timings["finalists"] = time.perf_counter() - t2
+
+    t3 = time.perf_counter()
     validation: dict[str, Any] = {}
     if validate_realizations > 0 and res.success:
         vseed = int(np.random.SeedSequence(entropy, spawn_key=(4,)).generate_state(1)[0])
         validation = validate_layout(
-            room, res.anchors, int(validate_realizations), vseed, sigma=sigma, nodes=nodes
+            room, anchors, int(validate_realizations), vseed, sigma=sigma, nodes=nodes
         )
-    timings["validation"] = time.perf_counter() - t2
+    timings["validation"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
 
     return PlacementResult(
         room=room,
-        anchors=res.anchors,
-        cost=res.cost,
+        anchors=np.asarray(anchors),
+        cost=float(chosen_cost),
         cost_name=cost_name(cost),
         history=res.history,
         best_anchors_history=res.best_anchors_history,
@@ -364,8 +434,11 @@ def seed_then_pso(
             "seed_search": seed_search,
             "seed": entropy,
             "validate_realizations": int(validate_realizations),
+            "finalists": int(finalists),
+            "finalist_realizations": int(finalist_realizations),
             "sigma": sigma,
             "options": dict(options.__dict__),
         },
         pso=res,
+        finalists=final,
     )

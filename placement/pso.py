@@ -82,7 +82,8 @@ class PSOResult:
 
     anchors (M, 3) best layout, cost its cost; history[t] the best cost after iteration t
     (non-increasing); best_anchors_history[t] the best layout then; costs (T, K) every
-    evaluated cost in evaluation order; nfev evaluations; nit iterations.
+    evaluated cost in evaluation order; nfev evaluations; nit iterations; pbest (K, M, 3)
+    each particle's best layout and pcost (K,) its cost.
     """
 
     anchors: np.ndarray
@@ -97,6 +98,8 @@ class PSOResult:
     seed: int
     elapsed: float
     failures: int = 0
+    pbest: np.ndarray | None = None
+    pcost: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -118,6 +121,8 @@ class PSOResult:
         d["anchors"] = self.anchors.tolist()
         d["best_anchors_history"] = [np.asarray(a).tolist() for a in self.best_anchors_history]
         d["costs"] = np.asarray(self.costs).tolist()
+        for k in ("pbest", "pcost"):
+            d[k] = None if d[k] is None else np.asarray(d[k]).tolist()
         return d
 
 
@@ -341,6 +346,8 @@ def pso(
             seed=entropy,
             elapsed=elapsed0 + time.perf_counter() - t0,
             failures=state["failures"],
+            pbest=pbest.copy(),
+            pcost=pcost.copy(),
         )
 
     message = state["stopped"] or f"reached the maximum number of iterations ({T})"

@@ -5,9 +5,10 @@ own closest grid node, so the range a node measures from an anchor depends on th
 anchor, that node and the noise only, not on the other anchors. Simulating every
 candidate point against every node once, for a few noise realizations (the *range
 table*), therefore gives the exact simulated ranges of every layout built from the
-candidates, and scoring such a layout costs only the least-squares positioning, about a
-tenth of a full evaluation. A local search on the table (swap one anchor for a nearby
-unused candidate while the cost falls) finds layouts that score well in the full
+candidates, and scoring such a layout costs only the least-squares positioning (all
+swaps of one anchor are positioned in one batch). A local search on the table (swap one
+anchor for one of the 25 nearest unused candidates while the cost falls; with the 10
+nearest it stalls in poor local optima) finds layouts that score well in the full
 simulation, which the bound-driven selections do not (BENCHMARKS.md): they are the
 first seeds of :func:`placement.seed_then_pso`.
 
@@ -118,17 +119,23 @@ def range_table(
     return RangeTable(cand, nodes, ranges, distances, region)
 
 
-def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:
-    """The simulated ``statistic`` of the Euclidean errors of the layout made of the
-    candidates ``indices`` (M,), over all R × P table entries; +inf if any node fails."""
+def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
+    """The simulated ``statistic`` of the Euclidean errors of each layout of candidates
+    ``layouts`` (L, M) indices, over all R × P table entries: (L,), +inf for a layout
+    where some node fails. The layouts are positioned in one batch."""
     from simulation.positioning import locate
 
-    S = np.asarray(indices, dtype=int)
-    x = locate(table.candidates[S], table.ranges[:, :, S], region=table.region)
-    e = np.linalg.norm(x - table.nodes, axis=-1)
-    if not np.all(np.isfinite(e)):
-        return math.inf
-    return SIMULATED_STATISTICS[statistic](e)
+    S = np.asarray(layouts, dtype=int)
+    ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, R, P, M)
+    x = locate(table.candidates[S], ranges, region=table.region)
+    e = np.linalg.norm(x - table.nodes, axis=-1)  # (L, R, P)
+    stat = SIMULATED_STATISTICS[statistic]
+    return np.array([stat(el) if np.all(np.isfinite(el)) else math.inf for el in e])
+
+
+def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:
+    """:func:`table_costs` of the one layout made of the candidates ``indices`` (M,)."""
+    return float(table_costs(table, np.asarray(indices)[None], statistic)[0])
 
 
 def _local_search(
@@ -147,31 +154,33 @@ def _local_search(
     N = len(table.candidates)
     nfev = 0
 
-    def cost(S):
+    def costs(layouts):
         nonlocal nfev
-        nfev += 1
-        return table_cost(table, S, statistic)
+        nfev += len(layouts)
+        return table_costs(table, np.stack(layouts), statistic)
 
     if start is None:  # the best of a few random subsets
         tries = [rng.choice(N, M, replace=False) for _ in range(random_starts)]
-        values = [cost(S) for S in tries]
-        S, f = tries[int(np.argmin(values))].copy(), float(min(values))
+        values = costs(tries)
+        S, f = tries[int(np.argmin(values))].copy(), float(np.min(values))
     else:
         S = np.asarray(start, dtype=int).copy()
-        f = cost(S)
+        f = float(costs([S])[0])
     improved = True
     while improved and nfev < max_evaluations:
         improved = False
         for i in rng.permutation(M):
-            for j in rng.permutation(neighbours[S[i]]):
-                if j in S or nfev >= max_evaluations:
-                    continue
-                T = S.copy()
-                T[i] = j
-                g = cost(T)
-                if g < f:
-                    S, f, improved = T, g, True
-                    break
+            # the swaps of anchor i, scored in one batch; the first that improves is taken
+            js = [j for j in rng.permutation(neighbours[S[i]]) if j not in S]
+            js = js[: max_evaluations - nfev]
+            if not js:
+                continue
+            swaps = [np.where(np.arange(M) == i, j, S) for j in js]
+            g = costs(swaps)
+            better = np.flatnonzero(g < f)
+            if better.size:
+                S, f, improved = swaps[better[0]], float(g[better[0]]), True
+                break
     return np.sort(S), f, nfev
 
 
@@ -235,9 +244,9 @@ def simulated_select(
     realizations: int = 3,
     starts: int = 8,
     random_starts: int = 30,
-    neighbours: int = 10,
+    neighbours: int = 25,
     initial=None,
-    max_evaluations: int = 1000,
+    max_evaluations: int = 5000,
     seed: int | None = None,
     nodes=None,
     executor: Executor | None = None,
@@ -288,19 +297,10 @@ def simulated_select(
 
     d = np.linalg.norm(table.candidates[:, None] - table.candidates[None], axis=-1)
     nbr = np.argsort(d, axis=1, kind="stable")[:, 1 : int(neighbours) + 1]
+
     jobs = [None] * int(starts) + inits
     args = [
-        (
-            table,
-            int(M),
-            statistic,
-            nbr,
-            s,
-            int(random_starts),
-            int(max_evaluations),
-            seed,
-            k,
-        )
+        (table, int(M), statistic, nbr, s, int(random_starts), int(max_evaluations), seed, k)
         for k, s in enumerate(jobs)
     ]
     if executor is None:

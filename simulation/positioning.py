@@ -74,20 +74,31 @@ def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def linear_start(anchors: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
-    """Linear LS solution (B, 3) of the squared-range differences, None if anchors coplanar."""
-    a = anchors
+def _linear_solution(a: np.ndarray, ranges: np.ndarray, owner: np.ndarray | None = None):
+    """Linear LS solutions (B, 3) of the squared-range differences for ranges (B, M), and
+    whether the anchors are not coplanar (a bool, or (B,) when ``owner`` maps each row to
+    its layout of anchors a (L, M, 3))."""
+    if owner is not None:  # layout by layout: the same arithmetic as for one layout alone
+        lin, ok = np.empty((len(ranges), 3)), np.empty(len(ranges), dtype=bool)
+        for layout in range(len(a)):
+            rows = owner == layout
+            lin[rows], ok[rows] = _linear_solution(a[layout], ranges[rows])
+        return lin, ok
     A = 2.0 * (a - a.mean(axis=0))  # (M, 3)
     sv = np.linalg.svd(A, compute_uv=False)
-    if sv[-1] <= 1e-9 * max(sv[0], 1e-300):
-        return None
     a2 = np.sum(a * a, axis=1)
     b = (a2 - a2.mean()) - (ranges * ranges - np.mean(ranges * ranges, axis=-1, keepdims=True))
-    return b @ np.linalg.pinv(A).T
+    return b @ np.linalg.pinv(A).T, bool(sv[-1] > 1e-9 * max(sv[0], 1e-300))
+
+
+def linear_start(anchors: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
+    """Linear LS solution (B, 3) of the squared-range differences, None if anchors coplanar."""
+    lin, ok = _linear_solution(anchors, ranges)
+    return lin if ok else None
 
 
 def _residuals(x, anchors, rho):
-    diff = x[:, None, :] - anchors[None]  # (B, M, 3)
+    diff = x[:, None, :] - anchors  # (B, M, 3); anchors (M, 3) or one layout per row (B, M, 3)
     dist = np.sqrt(np.einsum("bmk,bmk->bm", diff, diff))
     r = dist - rho
     unit = diff / np.where(dist > 0, dist, 1.0)[..., None]
@@ -135,6 +146,9 @@ def locate(
 ):
     """Least-squares positions from ranges: anchors (M, 3), ranges (..., P, M) in metres.
 
+    Several layouts at once: anchors (L, M, 3) and ranges (L, ..., P, M), layout l's
+    ranges in ``ranges[l]``; each node is solved as it would be alone (up to rounding).
+
     Parameters
     ----------
     region : (lo (3,), hi (3,)) box the nodes are known to be in (e.g. ``(0, room.size)``);
@@ -149,21 +163,37 @@ def locate(
     return their best iterate and ``converged = False`` (logged at DEBUG).
     """
     a = np.asarray(anchors, dtype=float)
-    if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] < 3:
-        raise ValueError(f"anchors: expected shape (M, 3) with M >= 3, got {a.shape}")
+    if a.ndim not in (2, 3) or a.shape[-1] != 3 or a.shape[-2] < 3:
+        raise ValueError(f"anchors: expected shape (M, 3) or (L, M, 3) with M >= 3, got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("anchors: must be finite")
     rho = np.asarray(ranges, dtype=float)
-    if rho.ndim < 1 or rho.shape[-1] != a.shape[0]:
-        raise ValueError(f"ranges: expected shape (..., P, {a.shape[0]}), got {rho.shape}")
+    M = a.shape[-2]
+    if rho.ndim < 1 or rho.shape[-1] != M:
+        raise ValueError(f"ranges: expected shape (..., P, {M}), got {rho.shape}")
+    if a.ndim == 3 and (rho.ndim < 2 or rho.shape[0] != a.shape[0]):
+        raise ValueError(
+            f"ranges: with {a.shape[0]} layouts expected shape ({a.shape[0]}, ..., P, {M}), "
+            f"got {rho.shape}"
+        )
     if not np.all(np.isfinite(rho)):
         raise ValueError("ranges: must be finite (no NaN or inf)")
     if int(max_iter) != max_iter or max_iter < 1:
         raise ValueError(f"max_iter: must be an integer >= 1, got {max_iter}")
     lead = rho.shape[:-1]
-    R = rho.reshape(-1, a.shape[0])
+    R = rho.reshape(-1, M)
     B = R.shape[0]
-    lo, hi = _region(a, region)
+    owner = None  # row -> layout, when there are several layouts
+    if a.ndim == 3:
+        owner = np.repeat(np.arange(a.shape[0]), B // a.shape[0])
+        if region is None:
+            lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
+        else:
+            lo, hi = _region(a[0], region)
+        anc = a[owner]  # (B, M, 3)
+    else:
+        lo, hi = _region(a, region)
+        anc = a
 
     if x0 is not None:
         x = np.broadcast_to(np.asarray(x0, dtype=float), (*lead, 3)).reshape(B, 3).copy()
@@ -171,15 +201,14 @@ def locate(
             raise ValueError("x0: must be finite")
     else:
         x = np.broadcast_to((lo + hi) / 2, (B, 3)).copy()
-        lin = linear_start(a, R)
-        if lin is not None:
-            inside = np.all((lin >= lo) & (lin <= hi), axis=1)
-            x[inside] = lin[inside]
+        lin, ok = _linear_solution(a, R, owner)
+        inside = ok & np.all((lin >= lo) & (lin <= hi), axis=1)
+        x[inside] = lin[inside]
     if bounded:
         x = np.clip(x, lo, hi)
     start = x.copy()
 
-    r, unit = _residuals(x, a, R)
+    r, unit = _residuals(x, anc, R)
     cost = 0.5 * np.sum(r * r, axis=1)
     status = np.zeros(B, dtype=np.int8)
     nit = np.zeros(B, dtype=np.int32)
@@ -187,6 +216,9 @@ def locate(
     # iterate on compact copies of the still-active nodes; finished nodes are written back
     idx = np.flatnonzero(status == 0)
     xa, ra, ua, ca, Ra = x[idx], r[idx], unit[idx], cost[idx], R[idx]
+    per_row = owner is not None
+    Aa = anc[idx] if per_row else anc
+    la, ha = (lo[idx], hi[idx]) if lo.ndim == 2 else (lo, hi)
     lam = np.full(idx.size, 1e-3)  # Nielsen's τ·max diag(JᵀJ); the diagonal is O(1) here
     nu = np.full(idx.size, 2.0)
     eye = np.eye(3)
@@ -199,9 +231,9 @@ def locate(
         step = _solve_sym3(JtJ + lam[:, None, None] * eye, -g)
         xn = xa + step
         if bounded:
-            xn = np.clip(xn, lo, hi)
+            xn = np.clip(xn, la, ha)
             step = xn - xa
-        rn, un = _residuals(xn, a, Ra)
+        rn, un = _residuals(xn, Aa, Ra)
         cn = 0.5 * np.einsum("bm,bm->b", rn, rn)
         # predicted reduction of the damped model: ½ δᵀ(λδ − g)
         pred = 0.5 * np.einsum("bk,bk->b", step, lam[:, None] * step - g)
@@ -236,6 +268,10 @@ def locate(
             keep = ~fin
             idx, xa, ra, ua, ca, Ra = idx[keep], xa[keep], ra[keep], ua[keep], ca[keep], Ra[keep]
             lam, nu = lam[keep], nu[keep]
+            if per_row:
+                Aa = Aa[keep]
+            if lo.ndim == 2:
+                la, ha = la[keep], ha[keep]
 
     converged = status > 0
     if not np.all(converged):

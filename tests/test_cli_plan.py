@@ -28,6 +28,10 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
         "1",
         "--search-spacing",
         "2.0",
+        "--finalists",
+        "3",
+        "--finalist-realizations",
+        "1",
         "--workers",
         "1",
         "--out",
@@ -48,7 +52,11 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
     assert [s["name"] for s in res["seeds"]] == ["simulated-1", "relax-A"]
     assert res["settings"]["seed_search"]["nfev"] > 0
     assert all(s["cost"] > 0 for s in res["seeds"])
-    assert res["cost"] <= min(s["cost"] for s in res["seeds"])
+    assert res["history"][-1] <= min(s["cost"] for s in res["seeds"])
+    # the finalists were re-scored and the lowest re-scored one is the answer
+    best = min(res["finalists"], key=lambda f: f["cost"])
+    np.testing.assert_array_equal(anchors, np.array(best["anchors"]))
+    assert res["cost"] == best["pso_cost"] and "finalist 1" in text
     v = res["validation"]
     assert v["realizations"] == 2 and len(v["errors"]) == 2 and len(v["errors"][0]) == 270
     assert abs(v["std"] - np.std(np.array(v["errors"]))) < 1e-5

@@ -101,3 +101,19 @@ def test_bad_input():
         locate(a[:2], np.ones((1, 2)))
     with pytest.raises(ValueError, match="max_iter"):
         locate(a, np.ones((1, 4)), max_iter=0)
+
+
+def test_several_layouts_at_once_match_one_by_one():
+    rng = np.random.default_rng(4)
+    room = Room.techtile()
+    anchors = np.stack([room.corners_layout(), room.corners_layout()[::-1] * 0.9 + 0.1])
+    nodes = room.grid()[::9]
+    true = np.linalg.norm(nodes[:, None] - anchors[:, None], axis=-1)  # (2, P, M)
+    ranges = true[:, None] + rng.normal(0, 0.3, (2, 3, *true.shape[1:]))  # (2, R, P, M)
+    for kw in ({}, {"region": (np.zeros(3), np.array(room.size))}, {"bounded": True}):
+        both = locate(anchors, ranges, **kw)
+        assert both.shape == (2, 3, len(nodes), 3)
+        for i in range(2):
+            np.testing.assert_allclose(both[i], locate(anchors[i], ranges[i], **kw), atol=1e-6)
+    with pytest.raises(ValueError, match="layouts"):
+        locate(anchors, ranges[:1])

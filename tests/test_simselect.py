@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import simulation
-from placement.simselect import range_table, simulated_select, table_cost
+from placement.simselect import range_table, simulated_select, table_cost, table_costs
 from placement.surfaces import candidate_grid, on_surfaces
 from simulation import Room
 
@@ -97,3 +97,10 @@ def test_simulated_select_rejects_bad_input():
         simulated_select(ROOM, 4, table=t, initial=[[0, 1, 2, 2]])
     with pytest.raises(ValueError, match="candidates"):
         simulated_select(ROOM, 8, table=t)
+
+
+def test_layouts_scored_in_one_batch_score_as_one_by_one():
+    t = range_table(ROOM, CAND[:12], NODES, realizations=2, seed=3)
+    rng = np.random.default_rng(2)
+    layouts = np.stack([rng.choice(12, 4, replace=False) for _ in range(6)])
+    np.testing.assert_array_equal(table_costs(t, layouts), [table_cost(t, S) for S in layouts])

@@ -38,20 +38,29 @@ def register(sub) -> None:
     p.add_argument(
         "--search-starts",
         type=int,
-        default=8,
         help="local searches of the simulation-driven seed search (8; 0: skip it)",
     )
     p.add_argument(
         "--search-realizations",
         type=int,
-        default=3,
         help="noise realizations in the seed search's range table (3)",
     )
     p.add_argument(
         "--search-spacing",
         type=float,
-        default=0.6,
         help="spacing of the seed search's candidate points in m (0.6)",
+    )
+    p.add_argument(
+        "--finalists",
+        type=int,
+        default=4,
+        help="best distinct swarm layouts re-scored before choosing (4; 1: the swarm's best)",
+    )
+    p.add_argument(
+        "--finalist-realizations",
+        type=int,
+        default=10,
+        help="noise realizations per re-scored finalist (10)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
@@ -96,6 +105,8 @@ def available_cores() -> int:
 
 
 def run(args) -> int:
+    from numpy import array_equal as np_equal
+
     from placement.plan import seed_then_pso
 
     room = load_room(args.room)
@@ -118,10 +129,16 @@ def run(args) -> int:
             realizations=args.realizations,
             seeds=None if args.no_seeds else "auto",
             search={
-                "starts": args.search_starts,
-                "realizations": args.search_realizations,
-                "spacing": args.search_spacing,
+                key: value
+                for key, value in (
+                    ("starts", args.search_starts),
+                    ("realizations", args.search_realizations),
+                    ("spacing", args.search_spacing),
+                )
+                if value is not None  # unset: the library's default
             },
+            finalists=args.finalists,
+            finalist_realizations=args.finalist_realizations,
             executor=executor,
             seed=args.seed,
             progress=not args.no_progress,
@@ -134,7 +151,13 @@ def run(args) -> int:
     for s in res.seeds:
         print(f"  seed {s.name:<22} mean PEB {s.mean_peb:.4f} m   cost {s.cost:.4g}")
     print(f"PSO: {res.nit} iterations, {res.nfev} evaluations, {res.message}")
-    print(f"best {res.cost_name} cost {res.cost:.4g}")
+    for k, f in enumerate(res.finalists):
+        mark = "*" if np_equal(f["anchors"], res.anchors) else " "
+        print(
+            f" {mark}finalist {k + 1}: PSO cost {f['pso_cost']:.4g}, "
+            f"re-scored {f['cost']:.4g} over {args.finalist_realizations} realizations"
+        )
+    print(f"chosen layout: {res.cost_name} cost {res.cost:.4g} in the swarm")
     print("anchors (m):")
     for a in res.anchors:
         print(f"  {a[0]:7.3f} {a[1]:7.3f} {a[2]:7.3f}")
