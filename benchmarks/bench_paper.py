@@ -204,6 +204,7 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
         realizations=args.pso_realizations,
         seeds=None if method == "pso" else "auto",
         search={"starts": args.search_starts},
+        finalists=args.finalists,
         executor=executor,
         seed=seed,
         progress=False,
@@ -511,6 +512,12 @@ def parse_args():
         type=int,
         default=8,
         help="starts of seed_then_pso's simulation-driven seed search (0: analytic seeds only)",
+    )
+    ap.add_argument(
+        "--finalists",
+        type=int,
+        default=4,
+        help="seed_then_pso's re-scored finalists (1: the swarm's best, as before they existed)",
     )
     ap.add_argument("--realizations", type=int, default=100, help="validation R (b, c)")
     ap.add_argument("--corner-realizations", type=int, default=500, help="R of section a")

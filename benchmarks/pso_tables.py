@@ -16,15 +16,16 @@ def main(folder: str) -> None:
         "| M | seed | unseeded: final cost (m²), reach / nfev, σ / P95 (m), s "
         "| seeded: first cost, reach, ratio, nfev, σ / P95 (m), s (seed search s) "
         "| seed search: table eq. evaluations, positioning-only layouts "
-        "| ratio counting the seeding's wall time as evaluations |"
+        "| ratio counting the seeding's wall time as evaluations "
+        "| chosen finalist (unseeded, seeded) |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|")
     for up in sorted(d.glob("M*_s*_unseeded.json"), key=lambda p: p.name):
         sp = up.with_name(up.name.replace("unseeded", "seeded"))
         if not sp.exists():
             continue
         u, s = json.loads(up.read_text()), json.loads(sp.read_text())
-        t = u["cost"]
+        t = u["history"][-1]  # the unseeded swarm's final best cost
         base, need = nfev_to_reach(u["costs"], t), nfev_to_reach(s["costs"], t)
         ratio = "never" if need is None else f"{need / base:.4f}"
         uv, sv, ss = u["validation"], s["validation"], s["seed_search"]
@@ -39,8 +40,18 @@ def main(folder: str) -> None:
             f"{sv['std']:.3f} / {sv['p95']:.3f}, {s['seconds']:.0f} "
             f"({s['timings']['seeding']:.0f}) "
             f"| {ss['equivalent_evaluations']:.1f}, {ss['nfev']} "
-            f"| {ratio_all} ({seeding:.0f} + {need or '—'}) / {base} |"
+            f"| {ratio_all} ({seeding:.0f} + {need or '—'}) / {base} "
+            f"| {chosen(u)}, {chosen(s)} |"
         )
+
+
+def chosen(run: dict) -> str:
+    """Which finalist (by PSO cost, 1 = the swarm's best) had the lowest re-scored cost."""
+    f = run.get("finalists") or []
+    if not f:
+        return "—"
+    k = min(range(len(f)), key=lambda i: f[i]["cost"])
+    return f"{k + 1} of {len(f)}"
 
 
 if __name__ == "__main__":
