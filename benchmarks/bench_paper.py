@@ -51,7 +51,7 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _common import emit  # noqa: E402
+from _common import PAPER_TABLE1, emit  # noqa: E402
 
 from analysis.fim import peb  # noqa: E402
 from placement.costs import make_cost  # noqa: E402
@@ -65,13 +65,7 @@ SIGMA_R = 0.04  # m, range σ of the PEB (SPEC §3 default)
 OUTLIER_M = 0.2  # m: a range error beyond this (5 σ_r) counts as an outlier range
 RATIO_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95, 1.0)
 
-#: paper values (SPEC §6): Table I and §V-A
-PAPER_TABLE1 = {
-    4: {"std": 0.803, "mean": 0.995, "p95": 2.629},
-    6: {"std": 0.691, "mean": 0.913, "p95": 2.272},
-    8: {"std": 0.587, "mean": 0.797, "p95": 1.986},
-    10: {"std": 0.563, "mean": 0.773, "p95": 1.876},
-}
+#: paper values (SPEC §6): §V-A (Table I is PAPER_TABLE1 in _common)
 PAPER_CORNERS = {
     "corners": {"std": 1.362, "mean_dop": 2.52},
     "optimized": {"std": 0.811, "mean_dop": 1.74},
@@ -239,6 +233,30 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
         "seconds_per_evaluation": p.elapsed / max(res.nfev, 1),
         "seeds": [{"name": s.name, "mean_peb_m": s.mean_peb, "cost": s.cost} for s in res.seeds],
         "resumed_from_checkpoint": bool(ckpt is not None and p.elapsed > seconds + 1.0),
+    }
+
+
+def stp_from_bench_pso(path: Path, args) -> dict:
+    """A seed_then_pso layout entry from a run that bench_pso.py saved (same seed, the
+    library's current defaults); seconds = seeding + PSO + re-scoring of the finalists."""
+    r = json.loads(path.read_text())
+    t = r["timings"]
+    return {
+        "method": "stp",
+        "M": r["M"],
+        "seed": r["seed"],
+        "anchors": r["anchors"],
+        "seconds": t["seeding"] + t["pso"] + t.get("finalists", 0.0),
+        "cost_variance_m2": r["cost"],
+        "nit": r["nit"],
+        "nfev": r["nfev"],
+        "max_iterations": args.iterations_for(r["M"]),
+        "particles": args.particles,
+        "message": r["message"],
+        "history": r["history"],
+        "timings": t,
+        "seeds": r["seeds"],
+        "from": str(path),
     }
 
 
@@ -519,6 +537,11 @@ def parse_args():
         default=4,
         help="seed_then_pso's re-scored finalists (1: the swarm's best, as before they existed)",
     )
+    ap.add_argument(
+        "--stp-from",
+        metavar="DIR",
+        help="take the seed_then_pso layouts from bench_pso.py's saved seeded runs in DIR",
+    )
     ap.add_argument("--realizations", type=int, default=100, help="validation R (b, c)")
     ap.add_argument("--corner-realizations", type=int, default=500, help="R of section a")
     ap.add_argument("--validation-seed", type=int, default=2023, help="same for every layout")
@@ -576,6 +599,13 @@ def main() -> None:
     def store(k, entry):
         L[k] = to_jsonable(entry)
         layouts_path.write_text(json.dumps(L, indent=1))
+
+    if args.stp_from:
+        for M in args.anchors:
+            for s in args.seeds:
+                path = Path(args.stp_from) / f"M{M}_s{s}_seeded.json"
+                if path.exists():
+                    store(key("stp", M, s), stp_from_bench_pso(path, args))
 
     executor = ProcessPoolExecutor(args.workers) if args.workers > 1 else None
     try:

@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from _common import PAPER_TABLE1
+
 from placement.pso import nfev_to_reach
 
 
@@ -42,6 +44,26 @@ def main(folder: str) -> None:
             f"| {ss['equivalent_evaluations']:.1f}, {ss['nfev']} "
             f"| {ratio_all} ({seeding:.0f} + {need or '—'}) / {base} "
             f"| {chosen(u)}, {chosen(s)} |"
+        )
+
+    print("\nseed_then_pso (seeded runs) against the paper's Table I, validated over R = 100:\n")
+    print("| M | paper σ / mean / P95 (m) | runs: seed σ / mean / P95 (m) | σ and P95 below |")
+    print("|---|---|---|---|")
+    for M, paper in PAPER_TABLE1.items():
+        runs = sorted(
+            (json.loads(p.read_text()) for p in d.glob(f"M{M}_s*_seeded.json")),
+            key=lambda r: r["seed"],
+        )
+        if not runs:
+            continue
+        cells, below = [], 0
+        for r in runs:
+            v = r["validation"]
+            cells.append(f"{r['seed']}: {v['std']:.3f} / {v['mean']:.3f} / {v['p95']:.3f}")
+            below += v["std"] < paper["std"] and v["p95"] < paper["p95"]
+        print(
+            f"| {M} | {paper['std']:.3f} / {paper['mean']:.3f} / {paper['p95']:.3f} "
+            f"| {'; '.join(cells)} | {below} of {len(runs)} |"
         )
 
 
