@@ -66,7 +66,7 @@ class PlacementResult:
     cost per iteration (non-increasing); finalists the best distinct particle layouts with
     their PSO cost and their re-scored cost (the chosen one has the lowest re-scored cost,
     see :func:`seed_then_pso`); seeds the seed layouts with their costs; validation the
-    statistics of the best layout over ``validate_realizations`` noise
+    statistics of the chosen layout over ``validate_realizations`` noise
     realizations (σ, mean, P95, RMS of the Euclidean error in m; mean PEB in m with
     σ_r = 0.04 m, PEB = √tr J⁻¹); timings in seconds.
     """
@@ -225,7 +225,11 @@ def validate_layout(
 
 
 def _rescore(cost: SimulatedCost, anchors: np.ndarray, seed: int) -> float:
-    return float(cost(anchors, np.random.default_rng(seed)))
+    try:
+        return float(cost(anchors, np.random.default_rng(seed)))
+    except Exception as exc:  # noqa: BLE001 - a failed re-score only drops that finalist
+        logger.warning("re-scoring a finalist failed: %s", exc)
+        return math.inf
 
 
 def rescore_finalists(
@@ -255,13 +259,7 @@ def rescore_finalists(
         values = [_rescore(scorer, res.pbest[i], seed) for i in picked]
     else:
         futures = [executor.submit(_rescore, scorer, res.pbest[i], seed) for i in picked]
-        values = []
-        for f in futures:
-            try:
-                values.append(f.result())
-            except Exception as exc:  # noqa: BLE001 - a failed re-score only drops a finalist
-                logger.warning("re-scoring a finalist failed: %s", exc)
-                values.append(math.inf)
+        values = [f.result() for f in futures]
     return [
         {"anchors": res.pbest[i].copy(), "pso_cost": float(res.pcost[i]), "cost": v}
         for i, v in zip(picked, values, strict=True)
