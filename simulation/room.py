@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from simulation import checks
+
 #: The six planes of a shoebox: name -> (axis, side), side 0 is the plane at 0, 1 at L.
 SURFACES: dict[str, tuple[int, int]] = {
     "floor": (2, 0),
@@ -36,8 +38,17 @@ TECHTILE_ABSORPTION: dict[str, float] = {
 }
 
 
+#: physically meaningful ranges of the room's numbers (checked by :class:`Room`)
+SIZE_RANGE = (0.5, 100.0)  # m, each side of an indoor room
+TEMPERATURE_RANGE = (-40.0, 60.0)  # °C: c from 306 to 366 m/s
+SOUND_SPEED_RANGE = (250.0, 450.0)  # m/s, air
+AIR_ABSORPTION_RANGE = (0.0, 5.0)  # 1/m
+#: highest image-source order: (2N+1)(2N²+2N+3)/3 images, 2625 at N = 12
+MAX_ORDER = 12
+
+
 def _check_surface_names(names, what: str) -> None:
-    unknown = [n for n in names if n not in SURFACES]
+    unknown = [n for n in names if not isinstance(n, str) or n not in SURFACES]
     if unknown:
         raise ValueError(f"{what}: unknown surface name(s) {unknown}; allowed: {list(SURFACES)}")
 
@@ -48,19 +59,20 @@ class Room:
 
     Attributes
     ----------
-    size : (Lx, Ly, Lz) in metres, each > 0.
+    size : (Lx, Ly, Lz) in metres, each in [0.5, 100] m.
     absorption : energy absorption coefficient α in [0, 1] per surface name; the
         reflection amplitude is β = √(1 − α). Missing surfaces default to the
         techtile values.
-    temperature : air temperature in °C (> −273.15); sets :attr:`speed_of_sound`.
-    max_order : image-source reflection order (integer ≥ 0).
+    temperature : air temperature in °C, in [−40, 60]; sets :attr:`speed_of_sound`.
+    max_order : image-source reflection order, an integer in [0, 12].
     air_absorption : air attenuation coefficient a in 1/m; a path of length d is
-        scaled in amplitude by exp(−a·d/2) (a ≥ 0).
+        scaled in amplitude by exp(−a·d/2) (a in [0, 5]).
     mounting : the surfaces anchors may be mounted on.
     anchor_offset : anchors sit this far (m) from their plane and at least this far
         from the neighbouring planes.
     node_margin : the evaluation grid keeps this distance (m) from every plane.
-    sound_speed : optional explicit speed of sound in m/s, overriding temperature.
+    sound_speed : optional explicit speed of sound in m/s (in [250, 450]), overriding
+        temperature.
     name : a label used in reports.
     """
 
@@ -76,22 +88,35 @@ class Room:
     name: str = "techtile"
 
     def __post_init__(self) -> None:
-        size = tuple(float(s) for s in np.asarray(self.size, dtype=float).ravel())
-        if len(size) != 3:
-            raise ValueError(f"size: expected 3 lengths (Lx, Ly, Lz) in metres, got {len(size)}")
-        if not all(math.isfinite(s) and s > 0 for s in size):
-            raise ValueError(f"size: every length must be finite and > 0 m, got {size}")
+        lo, hi = SIZE_RANGE
+        try:
+            size = checks.reals("size", self.size, shape=(3,), low=lo, high=hi, unit="m")
+        except ValueError as exc:
+            raise ValueError(
+                f"size: expected 3 lengths (Lx, Ly, Lz), each in [{lo:g}, {hi:g}] m, "
+                f"got {checks.describe(self.size)}"
+            ) from exc
+        size = tuple(float(s) for s in size)
         object.__setattr__(self, "size", size)
 
         absorption = dict(TECHTILE_ABSORPTION)
+        checks.mapping(
+            "absorption", self.absorption, "a mapping (TOML table) of surface name -> [0, 1]"
+        )
         _check_surface_names(self.absorption, "absorption")
-        absorption.update({k: float(v) for k, v in self.absorption.items()})
-        for k, v in absorption.items():
-            if not (0.0 <= v <= 1.0):
-                raise ValueError(f"absorption[{k!r}]: must be in [0, 1], got {v}")
+        for k, v in self.absorption.items():
+            absorption[k] = checks.real(f"absorption[{k!r}]", v, low=0.0, high=1.0)
         object.__setattr__(self, "absorption", absorption)
 
-        mounting = (self.mounting,) if isinstance(self.mounting, str) else tuple(self.mounting)
+        if isinstance(self.mounting, str):
+            mounting = (self.mounting,)
+        elif isinstance(self.mounting, list | tuple):
+            mounting = tuple(self.mounting)
+        else:
+            raise ValueError(
+                f"mounting: must be a surface name or a list of them from {list(SURFACES)}, "
+                f"got {checks.describe(self.mounting)}"
+            )
         if not mounting:
             raise ValueError("mounting: at least one surface is required")
         _check_surface_names(mounting, "mounting")
@@ -99,24 +124,24 @@ class Room:
             raise ValueError(f"mounting: duplicate surface names in {mounting}")
         object.__setattr__(self, "mounting", mounting)
 
-        if not (math.isfinite(self.temperature) and self.temperature > -273.15):
-            raise ValueError(f"temperature: must be > -273.15 °C, got {self.temperature}")
-        if self.sound_speed is not None and not (
-            math.isfinite(self.sound_speed) and self.sound_speed > 0
-        ):
-            raise ValueError(f"sound_speed: must be > 0 m/s or None, got {self.sound_speed}")
-        if int(self.max_order) != self.max_order or self.max_order < 0:
-            raise ValueError(f"max_order: must be an integer >= 0, got {self.max_order}")
-        object.__setattr__(self, "max_order", int(self.max_order))
-        if not (math.isfinite(self.air_absorption) and self.air_absorption >= 0):
-            raise ValueError(f"air_absorption: must be >= 0 1/m, got {self.air_absorption}")
+        lo, hi = TEMPERATURE_RANGE
+        t = checks.real("temperature", self.temperature, low=lo, high=hi, unit="°C")
+        object.__setattr__(self, "temperature", t)
+        if self.sound_speed is not None:
+            lo, hi = SOUND_SPEED_RANGE
+            c = checks.real("sound_speed", self.sound_speed, low=lo, high=hi, unit="m/s")
+            object.__setattr__(self, "sound_speed", c)
+        object.__setattr__(
+            self, "max_order", checks.count("max_order", self.max_order, low=0, high=MAX_ORDER)
+        )
+        lo, hi = AIR_ABSORPTION_RANGE
+        a = checks.real("air_absorption", self.air_absorption, low=lo, high=hi, unit="1/m")
+        object.__setattr__(self, "air_absorption", a)
+        if not isinstance(self.name, str):
+            raise ValueError(f"name: must be a string, got {checks.describe(self.name)}")
         half = min(size) / 2
         for fname in ("anchor_offset", "node_margin"):
-            v = float(getattr(self, fname))
-            if not (0.0 <= v < half):
-                raise ValueError(
-                    f"{fname}: must be in [0, {half:g}) m (half the smallest room size), got {v}"
-                )
+            v = checks.real(fname, getattr(self, fname), low=0.0, high=half, high_open=True)
             object.__setattr__(self, fname, v)
 
     # -- constructors -------------------------------------------------------------------
@@ -128,22 +153,40 @@ class Room:
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Room:
         """Build a room from :meth:`to_dict` output (unknown keys raise ``ValueError``)."""
+        checks.mapping("room", d, "a mapping of Room fields")
         known = {f for f in cls.__dataclass_fields__}
-        unknown = set(d) - known
+        unknown = [k for k in d if k not in known]
         if unknown:
-            raise ValueError(f"room: unknown field(s) {sorted(unknown)}; allowed: {sorted(known)}")
+            raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
         kw = dict(d)
-        if "size" in kw:
-            kw["size"] = tuple(kw["size"])
-        if "mounting" in kw:
+        if isinstance(kw.get("mounting"), list):
             kw["mounting"] = tuple(kw["mounting"])
         return cls(**kw)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Room:
-        """Read a room from a TOML file with the keys of :meth:`to_dict`."""
-        with open(path, "rb") as fh:
-            return cls.from_dict(tomllib.load(fh))
+        """Read a room from a TOML file with the keys of :meth:`to_dict`.
+
+        Every problem (missing, unreadable, empty or invalid file, a bad key or value)
+        raises ``ValueError`` naming the file.
+        """
+        p = checks.input_file("room file", path)
+        try:
+            with open(p, "rb") as fh:
+                data = tomllib.load(fh)
+        except OSError as exc:
+            raise ValueError(f"room file {p}: cannot read it ({exc.strerror})") from None
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"room file {p}: not valid TOML ({exc})") from None
+        if not data:
+            raise ValueError(
+                f"room file {p}: empty; give at least size = [Lx, Ly, Lz] in metres "
+                "(keys of Room.to_dict())"
+            )
+        try:
+            return cls.from_dict(data)
+        except ValueError as exc:
+            raise ValueError(f"room file {p}: {exc}") from None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON/TOML-serializable dictionary of every field."""
