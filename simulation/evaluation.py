@@ -15,15 +15,15 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft
 
+from simulation import checks
 from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
-from simulation.noise import DEFAULT_SNR_DB, noise_sigma
+from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
 from simulation.receiver import Receiver, dsp_for
@@ -31,6 +31,9 @@ from simulation.room import Room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
 NOISE_BUDGET_BYTES = 64 * 2**20
+#: bytes held per (realization, node, anchor) by evaluate_layout and locate, an estimate
+_BYTES_PER_RANGE = 8 * 16
+PRECISIONS = ("float64", "float32")
 
 
 class RangingScene:
@@ -52,14 +55,24 @@ class RangingScene:
         receiver: Receiver | None = None,
         precision: str = "float64",
     ):
+        if not isinstance(room, Room):
+            raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
         self.room = room
-        self.anchors = room.check_anchors(anchors, min_anchors=1)
-        self.nodes = room.grid() if nodes is None else _check_nodes(nodes)
+        self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
+        checks.distinct("anchors", self.anchors)
+        self.nodes = room.grid() if nodes is None else _check_nodes(nodes, room)
         self.chirp = Chirp() if chirp is None else chirp
         self.receiver = Receiver() if receiver is None else receiver
-        if not math.isfinite(snr_db):
-            raise ValueError(f"snr_db: must be finite, got {snr_db}")
-        self.snr_db = float(snr_db)
+        if not isinstance(self.chirp, Chirp):
+            raise ValueError(f"chirp: must be a simulation.Chirp, got {checks.describe(chirp)}")
+        if not isinstance(self.receiver, Receiver):
+            raise ValueError(
+                f"receiver: must be a simulation.Receiver, got {checks.describe(receiver)}"
+            )
+        self.snr_db = check_snr("snr_db", snr_db)
+        checks.choice("precision", precision, PRECISIONS)
+        n = len(self.nodes) * len(self.anchors) * self.receiver.window
+        checks.check_size("nodes x anchors", n * 8 * 4, value=(len(self.nodes), len(self.anchors)))
         c = room.speed_of_sound
         images = ImageSet.for_room(room)
         paths = compute_paths(room, self.anchors, self.nodes, images=images)
@@ -84,9 +97,9 @@ class RangingScene:
 
     def ranges(self, rng: np.random.Generator | None = None, noise: bool = True) -> np.ndarray:
         """(P, M) estimated ranges in metres for one realization drawn from ``rng``."""
-        if not noise:
+        if not checks.flag("noise", noise):
             return self._to_ranges(self.windows)
-        return self._to_ranges(self.noisy_windows(np.random.default_rng() if rng is None else rng))
+        return self._to_ranges(self.noisy_windows(checks.rng("rng", rng)))
 
     def ranges_batch(self, rngs, noise: bool = True) -> np.ndarray:
         """(len(rngs), P, M) ranges, realization r drawn from ``rngs[r]``."""
@@ -96,12 +109,10 @@ class RangingScene:
         return self._to_ranges(np.stack([self.noisy_windows(g) for g in rngs]))
 
 
-def _check_nodes(nodes) -> np.ndarray:
-    p = np.asarray(nodes, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] < 1:
-        raise ValueError(f"nodes: expected shape (P, 3) with P >= 1, got {p.shape}")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("nodes: coordinates must be finite")
+def _check_nodes(nodes, room: Room | None = None) -> np.ndarray:
+    p = checks.points("nodes", nodes)
+    if room is not None:
+        checks.inside("nodes", p, room.size)
     return p
 
 
@@ -118,8 +129,11 @@ def simulate_ranges(
 ) -> np.ndarray:
     """(P, M) range estimates in metres from the full simulation, one realization.
 
-    ``rng`` (numpy Generator) draws the noise (a fresh unseeded one when None).
+    ``rng`` (numpy Generator, or a seed) draws the noise (a fresh unseeded one when None).
+    Anchors may be anywhere in the room (on the mounting surfaces or not) but at least
+    1 mm apart; nodes must be inside the room.
     """
+    rng = checks.rng("rng", rng)
     scene = RangingScene(
         room,
         anchors,
@@ -172,6 +186,13 @@ class Evaluation:
     @property
     def realizations(self) -> int:
         return self.errors.shape[0]
+
+    @property
+    def geometry(self) -> str:
+        """The anchors' geometry: "3d", or "coplanar" (positions are mirror-ambiguous
+        through the anchors' plane; the room box resolves it), "collinear" (the position
+        is not determined: every fix is flagged unconverged)."""
+        return checks.geometry(self.anchors)
 
     @functools.cached_property
     def stats(self) -> dict:
@@ -241,6 +262,7 @@ class Evaluation:
                 **self.stats,
                 "n": int(self.errors.size),
                 "n_unconverged": self.n_unconverged,
+                "anchor_geometry": self.geometry,
                 "axis_mean": np.mean(ax, axis=(0, 1)).tolist(),
                 "axis_p95": np.percentile(ax, 95, axis=(0, 1)).tolist(),
                 "range_error_median_abs": np.median(
@@ -279,7 +301,10 @@ def evaluate_layout(
 ) -> Evaluation:
     """Simulate ``realizations`` noisy range sets for every node and locate the nodes.
 
-    anchors (M, 3) must lie in the room (M ≥ 4); nodes (P, 3) default to ``room.grid()``.
+    anchors (M, 3) must lie in the room (M ≥ 4; anywhere in the room, not only on the
+    mounting surfaces, so existing installations can be evaluated) and be at least 1 mm
+    apart; nodes (P, 3), inside the room, default to ``room.grid()``. Collinear anchors
+    give fixes flagged unconverged; ``Evaluation.geometry`` names the geometry.
     ``chunk`` realizations are processed at a time (default: as many as fit in
     :data:`NOISE_BUDGET_BYTES` of noise); the result does not depend on it. ``bounded``
     keeps the position estimates inside the room. ``precision="float32"`` selects the
@@ -287,10 +312,30 @@ def evaluate_layout(
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
     ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
     """
-    anchors = room.check_anchors(anchors)
-    if int(realizations) != realizations or realizations < 1:
-        raise ValueError(f"realizations: must be an integer >= 1, got {realizations}")
-    realizations = int(realizations)
+    if not isinstance(room, Room):
+        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    anchors = room.check_anchors(checks.reals("anchors", anchors))
+    realizations = checks.count("realizations", realizations, low=1)
+    seed = checks.seed("seed", seed)
+    noise = checks.flag("noise", noise)
+    bounded = checks.flag("bounded", bounded)
+    max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)
+    if chunk is not None:
+        chunk = checks.count("chunk", chunk, low=1)
+    if workers is not None and (isinstance(workers, bool) or workers not in range(-1, 1025)):
+        raise ValueError(
+            "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
+            f"got {checks.describe(workers)}"
+        )
+    if workers == 0:
+        raise ValueError("workers: must be None, -1 (all cores) or an integer in [1, 1024], got 0")
+    n_nodes = len(room.grid()) if nodes is None else len(_check_nodes(nodes, room))
+    checks.check_size(
+        "realizations",
+        realizations * n_nodes * len(anchors) * _BYTES_PER_RANGE,
+        value=realizations,
+        hint=f"{n_nodes} nodes x {len(anchors)} anchors per realization; use fewer",
+    )
     scene = RangingScene(
         room,
         anchors,
@@ -304,9 +349,6 @@ def evaluate_layout(
     if chunk is None:
         per = P * M * scene.receiver.window * 8
         chunk = max(1, NOISE_BUDGET_BYTES // per)
-    if int(chunk) != chunk or chunk < 1:
-        raise ValueError(f"chunk: must be an integer >= 1, got {chunk}")
-    chunk = int(chunk)
     children = np.random.SeedSequence(seed).spawn(realizations)
     ranges = np.empty((realizations, P, M))
     threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
@@ -328,7 +370,7 @@ def evaluate_layout(
         errors=errors,
         converged=fix.converged,
         noise_sigma=scene.noise_sigma,
-        seed=None if seed is None else int(seed) if np.isscalar(seed) else None,
+        seed=seed,
         snr_db=scene.snr_db,
         room=room,
     )

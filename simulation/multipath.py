@@ -26,17 +26,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simulation import checks
 from simulation.directivity import aim_vectors, cardioid
-from simulation.room import Room
+from simulation.room import MAX_ORDER, Room
 
 
 def image_indices(max_order: int) -> np.ndarray:
     """(I, 3) integer image indices n with |nx|+|ny|+|nz| ≤ ``max_order``; n = 0 first.
 
-    I = (2N+1)(2N²+2N+3)/3 for order N (63 for N = 3).
+    I = (2N+1)(2N²+2N+3)/3 for order N (63 for N = 3); N is at most 12.
     """
-    if int(max_order) != max_order or max_order < 0:
-        raise ValueError(f"max_order: must be an integer >= 0, got {max_order}")
+    max_order = checks.count("max_order", max_order, low=0, high=MAX_ORDER)
     r = np.arange(-int(max_order), int(max_order) + 1)
     n = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
     order = np.abs(n).sum(axis=1)
@@ -128,6 +128,13 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"nodes: expected shape (P, 3), got {p.shape}")
     images = ImageSet.for_room(room) if images is None else images
+    n = p.shape[0] * a.shape[0] * len(images)
+    checks.check_size(
+        "nodes x anchors x image sources",
+        n * 8 * 10,
+        value=(p.shape[0], a.shape[0], len(images)),
+        hint="use fewer nodes or anchors, or a lower max_order",
+    )
     aim = aim_vectors(a, room.centroid if aim_at is None else np.asarray(aim_at, float))  # (M,3)
     q = images.positions(room, a)  # (M, I, 3)
     u = p[:, None, None, :] - q[None]  # (P, M, I, 3) image -> node

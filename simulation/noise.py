@@ -14,10 +14,9 @@ added to the received window before the receiver DSP.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from simulation import checks
 from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
 from simulation.received import received_windows
@@ -26,6 +25,14 @@ from simulation.room import Room
 
 #: default SNR at the grid node closest to each anchor, dB (SPEC §2)
 DEFAULT_SNR_DB = 30.0
+#: accepted SNR range in dB (from noise 100× the signal power to practically noise-free)
+SNR_RANGE_DB = (-20.0, 120.0)
+
+
+def check_snr(name: str, snr_db) -> float:
+    """The SNR in dB as a float, in :data:`SNR_RANGE_DB`; ValueError otherwise."""
+    lo, hi = SNR_RANGE_DB
+    return checks.real(name, snr_db, low=lo, high=hi, unit="dB")
 
 
 def reference_nodes(room: Room, anchors, grid_shape=(9, 6, 5)) -> np.ndarray:
@@ -50,8 +57,7 @@ def noise_sigma(
     σ_j² = mean(y_ref,j²) / 10^(snr_db/10), y_ref,j the noise-free window of anchor j at
     its :func:`reference_nodes` node.
     """
-    if not math.isfinite(snr_db):
-        raise ValueError(f"snr_db: must be finite, got {snr_db}")
+    snr_db = check_snr("snr_db", snr_db)
     a = np.asarray(anchors, dtype=float)
     ref = reference_nodes(room, a, grid_shape)
     paths = compute_paths(room, a, ref, images=images)  # (M nodes, M anchors, I)

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simulation import checks
+
 logger = logging.getLogger(__name__)
 
 STATUS_MESSAGES = {
@@ -31,7 +33,10 @@ STATUS_MESSAGES = {
     2: "relative cost change below ftol",
     3: "step below xtol",
     4: "zero residual",
+    -1: "anchors collinear or coincident: the position is not determined",
 }
+#: ranges below this (m) are not measurements; the receiver's noisy ranges reach -0.34 m
+RANGE_FLOOR = -1.0
 
 
 @dataclass(frozen=True)
@@ -160,7 +165,10 @@ def locate(
     full_output : return a :class:`PositionFix` instead of the (..., P, 3) array.
 
     Returns (..., P, 3) estimates, or a :class:`PositionFix`. Nodes that hit ``max_iter``
-    return their best iterate and ``converged = False`` (logged at DEBUG).
+    return their best iterate and ``converged = False`` (logged at DEBUG). With collinear
+    or coincident anchors (closer than 1 mm to a line) the position is not determined:
+    every node of that layout gets status −1 and ``converged = False``. Ranges below
+    −1 m (a noisy range may be slightly negative) raise ``ValueError``.
     """
     a = np.asarray(anchors, dtype=float)
     if a.ndim not in (2, 3) or a.shape[-1] != 3 or a.shape[-2] < 3:
@@ -178,8 +186,15 @@ def locate(
         )
     if not np.all(np.isfinite(rho)):
         raise ValueError("ranges: must be finite (no NaN or inf)")
-    if int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"max_iter: must be an integer >= 1, got {max_iter}")
+    if rho.size and rho.min() < RANGE_FLOOR:
+        raise ValueError(
+            f"ranges: must be distances >= {RANGE_FLOOR:g} m (noisy ranges may be slightly "
+            f"negative), got {rho.min():g} m"
+        )
+    max_iter = checks.count("max_iter", max_iter, low=1)
+    for name, tol in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):
+        checks.real(name, tol, low=0.0)
+    checks.flag("bounded", bounded)
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
     B = R.shape[0]
@@ -273,6 +288,10 @@ def locate(
             if lo.ndim == 2:
                 la, ha = la[keep], ha[keep]
 
+    rank = np.asarray(checks.anchor_rank(a))
+    if np.any(rank < 2):  # collinear: rotation about the anchor line leaves ranges unchanged
+        bad = (rank < 2) if owner is None else (rank < 2)[owner]
+        status[np.broadcast_to(bad, status.shape)] = -1
     converged = status > 0
     if not np.all(converged):
         logger.debug("locate: %d of %d nodes hit max_iter=%d", int(np.sum(~converged)), B, max_iter)
