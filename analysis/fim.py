@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from simulation import checks
+
 #: relative eigenvalue threshold below which J counts as singular (PEB ≥ 1e5× typical)
 SINGULAR_RTOL = 1e-10
 
@@ -30,8 +32,8 @@ _CHUNK_ELEMENTS = 1 << 21
 
 
 def _as_inputs(anchors, positions):
-    a = np.asarray(anchors, dtype=float)
-    p = np.asarray(positions, dtype=float)
+    a = checks.reals("anchors", anchors)
+    p = checks.reals("positions", positions)
     if a.ndim < 2 or a.shape[-1] != 3:
         raise ValueError(f"anchors: expected shape (M, 3) or (..., M, 3), got {a.shape}")
     if p.ndim == 1 and p.shape[0] == 3:
@@ -45,9 +47,7 @@ def _as_inputs(anchors, positions):
 
 def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> np.ndarray:
     """1/σ² broadcast to (..., P, M); σ must be > 0 (inf allowed: weight 0)."""
-    s = np.asarray(sigma, dtype=float)
-    if np.any(np.isnan(s)) or np.any(s <= 0):
-        raise ValueError("sigma: range standard deviations must be > 0 m (inf allowed), no NaN")
+    s = checks.reals("sigma", sigma, allow_inf=True, low=0.0, low_open=True, unit="m")
     try:
         s = np.broadcast_to(s, (*batch, P, M))
     except ValueError:

@@ -13,15 +13,19 @@ Every model has ``sigma(anchors, positions)`` returning σ in metres, broadcasta
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from simulation import checks
 from simulation.chirp import Chirp
 from simulation.directivity import aim_vectors, cardioid
+from simulation.noise import check_snr
 from simulation.receiver import Receiver
 from simulation.room import Room
+
+#: accepted constant range σ (m)
+SIGMA_RANGE = (0.0, 10.0)
 
 
 @dataclass(frozen=True)
@@ -31,8 +35,9 @@ class ConstantRangeNoise:
     value: float = 0.04
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.value) and self.value > 0):
-            raise ValueError(f"value: range σ must be > 0 m, got {self.value}")
+        lo, hi = SIGMA_RANGE
+        v = checks.real("value", self.value, low=lo, high=hi, low_open=True, unit="m")
+        object.__setattr__(self, "value", v)
 
     def sigma(self, anchors, positions) -> np.ndarray:
         """σ as a 0-d array (broadcasts to any (..., P, M))."""
@@ -87,8 +92,9 @@ class PhysicalRangeNoise:
     grid_shape: tuple[int, int, int] = (9, 6, 5)
 
     def __post_init__(self) -> None:
-        if not math.isfinite(self.snr_db):
-            raise ValueError(f"snr_db: must be finite, got {self.snr_db}")
+        if not isinstance(self.room, Room):
+            raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
+        object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
 
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""
@@ -160,11 +166,10 @@ def calibrated_sigma(
     noise-free constant error) is returned as the smallest positive float so the result
     can be used as ``sigma`` in :func:`analysis.fim` / :func:`analysis.peb`.
     """
-    e = np.asarray(range_errors, dtype=float)
-    if method not in ("mad", "inlier"):
-        raise ValueError(f"method: must be 'mad' or 'inlier', got {method!r}")
-    if not (math.isfinite(k) and k > 0):
-        raise ValueError(f"k: must be > 0, got {k}")
+    e = checks.reals("range_errors", range_errors)
+    checks.choice("method", method, ("mad", "inlier"))
+    k = checks.real("k", k, low=0.0, low_open=True)
+    per_node = checks.flag("per_node", per_node)
     if per_node:
         if e.ndim != 3 or e.shape[0] < 2:
             raise ValueError(f"range_errors: per_node needs shape (R >= 2, P, M), got {e.shape}")
@@ -199,7 +204,7 @@ class CalibratedRangeNoise:
     values: np.ndarray
 
     def __post_init__(self) -> None:
-        v = np.asarray(self.values, dtype=float)
+        v = checks.reals("values", self.values, low=0.0, low_open=True, unit="m")
         if v.ndim not in (1, 2) or v.size == 0:
             raise ValueError(f"values: expected shape (M,) or (P, M), got {v.shape}")
         if not np.all(np.isfinite(v) & (v > 0)):
@@ -248,8 +253,12 @@ class MultipathRangeNoise:
     snr_db: float = 30.0
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.floor) and self.floor > 0):
-            raise ValueError(f"floor: must be > 0 m, got {self.floor}")
+        if not isinstance(self.room, Room):
+            raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
+        lo, hi = SIGMA_RANGE
+        floor = checks.real("floor", self.floor, low=lo, high=hi, low_open=True, unit="m")
+        object.__setattr__(self, "floor", floor)
+        object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
 
     def bias(self, anchors, positions) -> np.ndarray:
         """(P, M) noise-free simulated range minus true distance, metres."""

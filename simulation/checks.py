@@ -243,7 +243,7 @@ def reals(
             raise TypeError
         if raw.dtype.kind == "O" and any(isinstance(x, bool | str | bytes) for x in raw.flat):
             raise TypeError
-        a = raw.astype(float)
+        a = np.asarray(raw, dtype=float)
     except (TypeError, ValueError, OverflowError):
         raise ValueError(f"{name}: must be an array of numbers, got {describe(value)}") from None
     if shape is not None:
