@@ -16,13 +16,18 @@ the same result serially, on a process pool, on Dask, and after a resume.
 from __future__ import annotations
 
 import hashlib
+import inspect
 import json
 import logging
 import math
 import os
+import pickle
+import signal
+import threading
 import time
 from collections.abc import Callable
-from concurrent.futures import Executor
+from concurrent.futures import Executor, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -30,11 +35,32 @@ from typing import Any
 import numpy as np
 
 from placement.surfaces import project, random_layout
+from placement.workers import WorkerPool
+from simulation import checks
 from simulation.room import Room
 
 logger = logging.getLogger(__name__)
 
 CHECKPOINT_VERSION = 1
+#: keys every checkpoint holds
+_CHECKPOINT_KEYS = (
+    "version", "fingerprint", "seed", "iteration", "x", "v", "pbest", "pcost", "gbest",
+    "gcost", "history", "best_anchors_history", "costs", "nfev", "failures", "rng",
+    "stopped", "elapsed",
+)  # fmt: skip
+
+
+class ExecutorBroken(RuntimeError):
+    """The executor cannot run evaluations any more (e.g. a worker process of a
+    ``ProcessPoolExecutor`` died: ``BrokenProcessPool``)."""
+
+
+class EvaluationTimeout(Exception):
+    """An evaluation of the cost exceeded ``eval_timeout``."""
+
+
+#: upper limits of the swarm's size and length, and of the number of anchors
+MAX_PARTICLES, MAX_ITERATIONS, MAX_ANCHORS = 10_000, 100_000, 100
 
 
 @dataclass(frozen=True)
@@ -62,18 +88,12 @@ class PSOOptions:
     patience: int = 20
 
     def __post_init__(self) -> None:
-        if int(self.particles) != self.particles or self.particles < 2:
-            raise ValueError(f"particles: must be an integer >= 2, got {self.particles}")
-        if int(self.iterations) != self.iterations or self.iterations < 1:
-            raise ValueError(f"iterations: must be an integer >= 1, got {self.iterations}")
+        checks.count("particles", self.particles, low=2, high=MAX_PARTICLES)
+        checks.count("iterations", self.iterations, low=1, high=MAX_ITERATIONS)
         for name in ("inertia", "cognitive", "social", "init_velocity", "tol"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name}: must be finite and >= 0, got {v}")
-        if not (math.isfinite(self.velocity_clamp) and self.velocity_clamp > 0):
-            raise ValueError(f"velocity_clamp: must be > 0, got {self.velocity_clamp}")
-        if int(self.patience) != self.patience or self.patience < 1:
-            raise ValueError(f"patience: must be an integer >= 1, got {self.patience}")
+            checks.real(name, getattr(self, name), low=0.0)
+        checks.real("velocity_clamp", self.velocity_clamp, low=0.0, low_open=True)
+        checks.count("patience", self.patience, low=1)
 
 
 @dataclass
@@ -145,12 +165,43 @@ def _stream(seed: int, key: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,))))
 
 
-def _evaluate_chunk(cost, layouts: np.ndarray, seed: int, iteration: int, ids) -> list:
-    """Evaluate layouts (k, M, 3) in one worker; a failing evaluation gives (inf, message)."""
+def _can_alarm() -> bool:
+    return hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
+
+
+def _timed(fn, timeout: float | None):
+    """``fn()``, raising :class:`EvaluationTimeout` after ``timeout`` seconds (SIGALRM, in a
+    main thread; elsewhere the caller's deadline applies)."""
+    if timeout is None or not _can_alarm():
+        return fn()
+
+    def expired(signum, frame):
+        raise EvaluationTimeout(f"the evaluation exceeded eval_timeout = {timeout:g} s")
+
+    old = signal.signal(signal.SIGALRM, expired)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        return fn()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _evaluate_chunk(
+    cost, layouts: np.ndarray, seed: int, iteration: int, ids, eval_timeout: float | None = None
+) -> list:
+    """Evaluate layouts (k, M, 3) in one worker; a failing evaluation gives (inf, message).
+
+    A layout whose anchors are collinear (or coincident) cannot position in 3D: inf.
+    """
     out = []
     for a, i in zip(layouts, ids, strict=True):
+        if len(a) >= 3 and checks.anchor_rank(a) < 2:
+            out.append((math.inf, None))
+            continue
         try:
-            c = float(cost(a, evaluation_rng(seed, iteration, int(i))))
+            rng = evaluation_rng(seed, iteration, int(i))
+            c = float(_timed(lambda a=a, rng=rng: cost(a, rng), eval_timeout))
             out.append((c if math.isfinite(c) else math.inf, None))
         except Exception as exc:  # noqa: BLE001 - one bad particle must not stop the run
             out.append((math.inf, f"{type(exc).__name__}: {exc}"))
@@ -162,6 +213,17 @@ def _workers(executor: Executor) -> int:
     return int(n) if n else (os.cpu_count() or 2)
 
 
+#: seconds added to the executor's deadline for a chunk under ``eval_timeout``
+_DEADLINE_GRACE = 10.0
+
+
+def _broken(iteration: int, exc: BaseException) -> ExecutorBroken:
+    return ExecutorBroken(
+        f"the executor broke at iteration {iteration} ({type(exc).__name__}: {exc}); "
+        "a placement.WorkerPool replaces dead workers and loses only their particles"
+    )
+
+
 def evaluate_swarm(
     cost,
     layouts: np.ndarray,
@@ -169,43 +231,163 @@ def evaluate_swarm(
     iteration: int,
     executor: Executor | None = None,
     chunksize: int | None = None,
+    *,
+    eval_timeout: float | None = None,
+    counts: dict[str, int] | None = None,
 ) -> tuple[np.ndarray, int]:
     """Costs (K,) of layouts (K, M, 3) at ``iteration``, and the number of failures.
 
-    With an executor the particles are submitted in chunks (default: one per worker).
+    With an executor the particles are submitted in chunks (default: one per worker). A
+    failing evaluation costs inf; so does a chunk whose worker process died
+    (:class:`~placement.workers.WorkerLost`, with a :class:`~placement.WorkerPool`) and
+    an evaluation over ``eval_timeout`` seconds. An executor that can run nothing any
+    more (a ``ProcessPoolExecutor`` after a worker died) raises :class:`ExecutorBroken`.
+    ``counts`` (optional) receives the numbers of "lost" and "timeouts" evaluations.
     """
     K = len(layouts)
     ids = np.arange(K)
     if executor is None:
-        results = _evaluate_chunk(cost, layouts, seed, iteration, ids)
+        results = _evaluate_chunk(cost, layouts, seed, iteration, ids, eval_timeout)
     else:
         size = chunksize or max(1, math.ceil(K / _workers(executor)))
-        futures = [
-            (
-                executor.submit(
-                    _evaluate_chunk, cost, layouts[i : i + size], seed, iteration, ids[i : i + size]
-                ),
-                i,
-            )
-            for i in range(0, K, size)
-        ]
+        starts = {}
+        try:
+            for i in range(0, K, size):
+                fut = executor.submit(
+                    _evaluate_chunk,
+                    cost,
+                    layouts[i : i + size],
+                    seed,
+                    iteration,
+                    ids[i : i + size],
+                    eval_timeout,
+                )
+                starts[fut] = i
+        except BrokenProcessPool as exc:
+            raise _broken(iteration, exc) from None
+        deadline = None
+        if eval_timeout is not None:
+            rounds = math.ceil(len(starts) / _workers(executor))
+            deadline = time.monotonic() + rounds * size * eval_timeout + _DEADLINE_GRACE
         results = [None] * K
-        for fut, start in futures:
-            n = min(size, K - start)
-            try:
-                chunk = fut.result()
-            except Exception as exc:  # noqa: BLE001 - a lost worker costs its particles only
-                chunk = [(math.inf, f"{type(exc).__name__}: {exc}")] * n
-            results[start : start + n] = chunk
+        pending = set(starts)
+        killed = False
+        while pending:
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            done, pending = wait(pending, timeout=left)
+            for fut in done:
+                start = starts[fut]
+                n = min(size, K - start)
+                try:
+                    chunk = fut.result()
+                except BrokenProcessPool as exc:
+                    raise _broken(iteration, exc) from None
+                except Exception as exc:  # noqa: BLE001 - a lost worker costs its particles only
+                    chunk = [(math.inf, f"{type(exc).__name__}: {exc}")] * n
+                results[start : start + n] = chunk
+            if pending and deadline is not None and time.monotonic() >= deadline:
+                reason = f"no result within the eval_timeout of {eval_timeout:g} s per evaluation"
+                kill = getattr(executor, "kill", None)
+                for fut in list(pending):
+                    if not killed and kill is not None and kill(fut, reason):
+                        continue  # resolves shortly as WorkerLost
+                    fut.cancel()
+                    start = starts[fut]
+                    n = min(size, K - start)
+                    results[start : start + n] = [(math.inf, f"EvaluationTimeout: {reason}")] * n
+                    pending.discard(fut)
+                killed = True
+                deadline = time.monotonic() + _DEADLINE_GRACE
     costs = np.array([c for c, _ in results], dtype=float)
     failures = 0
     for i, (_, err) in enumerate(results):
         if err is not None:
             failures += 1
+            if counts is not None:
+                key = None
+                if err.startswith("EvaluationTimeout") or "eval_timeout" in err:
+                    key = "timeouts"
+                elif err.startswith("WorkerLost"):
+                    key = "lost"
+                if key is not None:
+                    counts[key] = counts.get(key, 0) + 1
             logger.warning(
                 "iteration %d particle %d: cost failed (%s); cost set to inf", iteration, i, err
             )
     return costs, failures
+
+
+def load_checkpoint(path: str | os.PathLike) -> dict | None:
+    """The swarm state saved in a checkpoint file, or None if there is no file.
+
+    Raises ``ValueError`` naming the file when it is a directory, unreadable, not JSON
+    (e.g. truncated) or not a checkpoint of this version; delete it to start afresh.
+    """
+    p = Path(path)
+    if not p.exists():
+        return None
+    afresh = "delete it (or choose another --checkpoint) to start afresh"
+    if p.is_dir():
+        raise ValueError(f"checkpoint {p}: is a directory, expected a file")
+    try:
+        text = p.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"checkpoint {p}: cannot read it ({exc}); {afresh}") from None
+    try:
+        state = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"checkpoint {p}: not valid JSON, truncated? ({exc}); {afresh}") from None
+    if not isinstance(state, dict):
+        raise ValueError(
+            f"checkpoint {p}: expected a JSON object, got {checks.describe(state)}; {afresh}"
+        )
+    missing = [k for k in _CHECKPOINT_KEYS if k not in state]
+    if missing and state.get("version") == CHECKPOINT_VERSION:
+        raise ValueError(f"checkpoint {p}: not a complete checkpoint (no {missing}); {afresh}")
+    if missing:
+        raise ValueError(f"checkpoint {p}: not an anchorplan checkpoint; {afresh}")
+    try:
+        checks.count("iteration", state["iteration"], low=0)
+        for key in ("x", "v", "pbest", "gbest"):
+            checks.reals(key, state[key])
+        np.random.Generator(np.random.PCG64()).bit_generator.state = state["rng"]
+    except (ValueError, TypeError, KeyError) as exc:
+        raise ValueError(f"checkpoint {p}: damaged ({exc}); {afresh}") from None
+    return state
+
+
+def _check_cost(cost, executor) -> Callable:
+    """``cost`` as a ``cost(anchors, rng)`` callable; one-argument costs are wrapped."""
+    if not callable(cost):
+        raise ValueError(
+            f"cost: must be callable as cost(anchors, rng) -> float, got {checks.describe(cost)}"
+        )
+    try:
+        sig = inspect.signature(cost)
+    except (TypeError, ValueError):  # builtins without a signature: assume (anchors, rng)
+        sig = None
+    if sig is not None:
+        try:
+            sig.bind(None, None)
+        except TypeError:
+            try:
+                sig.bind(None)
+            except TypeError:
+                raise ValueError(
+                    f"cost: must accept (anchors, rng) or (anchors), got signature {sig}"
+                ) from None
+            from placement.costs import CallableCost
+
+            cost = CallableCost(cost, getattr(cost, "__name__", "callable"))
+    if isinstance(executor, ProcessPoolExecutor | WorkerPool):
+        try:
+            pickle.dumps(cost)
+        except Exception as exc:  # noqa: BLE001 - any pickling failure
+            raise ValueError(
+                f"cost: cannot be sent to worker processes ({type(exc).__name__}: {exc}); "
+                "define it at module level, or run without an executor"
+            ) from None
+    return cost
 
 
 def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed, initial) -> str:
@@ -246,6 +428,7 @@ def pso(
     callback: Callable[[PSOResult], bool | None] | None = None,
     checkpoint: str | os.PathLike | None = None,
     cost_label: str | None = None,
+    eval_timeout: float | None = None,
 ) -> PSOResult:
     """Minimize ``cost(anchors, rng)`` over layouts of M anchors on the mounting surfaces.
 
@@ -257,31 +440,76 @@ def pso(
         returning True stops the run.
     checkpoint : a JSON file written atomically after every iteration; if it exists and
         was written by a run with the same arguments, the run resumes from it and ends
-        with exactly the result of an uninterrupted run.
+        with exactly the result of an uninterrupted run (``extra["resumed_from"]``: the
+        iteration it resumed after). A damaged checkpoint raises ``ValueError``.
+    eval_timeout : seconds one evaluation may take; a longer one costs inf (counted in
+        ``failures`` and ``extra["timeouts"]``). Enforced with SIGALRM in the process that
+        evaluates (serial runs in the main thread, process pools); a worker that ignores
+        it is killed when the executor is a :class:`~placement.WorkerPool`.
+
+    Evaluations lost to a dead worker process of a :class:`~placement.WorkerPool` cost
+    inf (``failures``, ``extra["lost"]``); a plain ``ProcessPoolExecutor`` cannot survive
+    that and :class:`ExecutorBroken` is raised, the checkpoint holding the last iteration.
     """
+    if not isinstance(room, Room):
+        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    if options is not None and not isinstance(options, PSOOptions):
+        raise ValueError(
+            f"options: must be a PSOOptions (e.g. PSOOptions(**options)) or None, "
+            f"got {checks.describe(options)}"
+        )
     options = options or PSOOptions()
-    if int(M) != M or M < 1:
-        raise ValueError(f"M: number of anchors must be an integer >= 1, got {M}")
-    M = int(M)
+    M = checks.count("M", M, low=1, high=MAX_ANCHORS)
+    if executor is not None and not callable(getattr(executor, "submit", None)):
+        raise ValueError(
+            f"executor: must be a concurrent.futures.Executor or None, "
+            f"got {checks.describe(executor)}"
+        )
+    cost = _check_cost(cost, executor)
+    if chunksize is not None:
+        chunksize = checks.count("chunksize", chunksize, low=1)
+    seed = checks.seed("seed", seed)
+    progress = checks.flag("progress", progress)
+    if callback is not None and not callable(callback):
+        raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
+    if cost_label is not None and not isinstance(cost_label, str):
+        raise ValueError(f"cost_label: must be a string or None, got {checks.describe(cost_label)}")
+    if eval_timeout is not None:
+        eval_timeout = checks.real("eval_timeout", eval_timeout, low=0.0, low_open=True, unit="s")
+        if executor is None and not _can_alarm():
+            raise ValueError(
+                "eval_timeout: without an executor it needs the main thread (SIGALRM); "
+                "pass executor=placement.WorkerPool(...)"
+            )
     K, T = int(options.particles), int(options.iterations)
     if initial is not None:
-        initial = np.asarray(initial, dtype=float).reshape(-1, M, 3)
+        initial = checks.reals("initial", initial)
+        if initial.size % (3 * M) or initial.shape[-1] != 3 or initial.ndim not in (2, 3):
+            raise ValueError(
+                f"initial: expected seed layouts of shape (S, {M}, 3), got {initial.shape}"
+            )
+        initial = initial.reshape(-1, M, 3)
         if len(initial) > K:
             raise ValueError(f"initial: {len(initial)} seed layouts exceed particles = {K}")
-        if not np.all(np.isfinite(initial)):
-            raise ValueError("initial: seed layouts must be finite")
     label = cost_label or getattr(cost, "statistic", None) or type(cost).__name__
     fingerprint = _fingerprint(room, M, options, str(label), seed, initial)
-    ckpt = Path(checkpoint) if checkpoint is not None else None
+    ckpt = None
+    if checkpoint is not None:
+        ckpt = checks.output_path("checkpoint", checkpoint)
 
     state = None
-    if ckpt is not None and ckpt.exists():
-        saved = json.loads(ckpt.read_text())
+    resumed_from = None
+    saved = None if ckpt is None else load_checkpoint(ckpt)
+    if saved is not None:
         if saved.get("version") == CHECKPOINT_VERSION and saved.get("fingerprint") == fingerprint:
             state = saved
+            resumed_from = int(saved["iteration"])
             logger.info("resuming from %s at iteration %d", ckpt, saved["iteration"])
         else:
             logger.warning("checkpoint %s was written by a different run; starting afresh", ckpt)
+    counts = {"lost": 0, "timeouts": 0}
+    if state is not None:
+        counts = {k: int(state.get(k, 0)) for k in counts}
 
     t0 = time.perf_counter()
     size = np.array(room.size)
@@ -293,7 +521,9 @@ def pso(
         if initial is not None and len(initial):
             x[: len(initial)] = project(room, initial)
         v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * size
-        costs, failures = evaluate_swarm(cost, x, entropy, 0, executor, chunksize)
+        costs, failures = evaluate_swarm(
+            cost, x, entropy, 0, executor, chunksize, eval_timeout=eval_timeout, counts=counts
+        )
         best = int(np.argmin(costs))
         state = {
             "version": CHECKPOINT_VERSION,
@@ -314,6 +544,7 @@ def pso(
             "rng": _stream(entropy, 0).bit_generator.state,
             "stopped": None,
             "elapsed": 0.0,
+            **counts,
         }
         if ckpt is not None:
             _write_atomic(ckpt, state)
@@ -348,6 +579,7 @@ def pso(
             failures=state["failures"],
             pbest=pbest.copy(),
             pcost=pcost.copy(),
+            extra={**counts, "resumed_from": resumed_from},
         )
 
     message = state["stopped"] or f"reached the maximum number of iterations ({T})"
@@ -363,7 +595,9 @@ def pso(
             )
             v = np.clip(v, -vmax, vmax)
             x = project(room, x + v)
-            costs, failures = evaluate_swarm(cost, x, entropy, t, executor, chunksize)
+            costs, failures = evaluate_swarm(
+                cost, x, entropy, t, executor, chunksize, eval_timeout=eval_timeout, counts=counts
+            )
             better = costs < pcost
             pbest[better], pcost[better] = x[better], costs[better]
             i = int(np.argmin(pcost))
@@ -395,6 +629,7 @@ def pso(
                 rng=rng.bit_generator.state,
                 stopped=stop,
                 elapsed=elapsed0 + time.perf_counter() - t0,
+                **counts,
             )
             if callback is not None and callback(snapshot("running", True)):
                 state["stopped"] = "stopped by callback"
@@ -405,6 +640,13 @@ def pso(
                 bar.set_postfix(best=f"{gcost:.4g}")
             if state["stopped"]:
                 message = state["stopped"]
+    except ExecutorBroken as exc:
+        where = (
+            f"checkpoint {ckpt} holds iteration {state['iteration']}: rerun to resume"
+            if ckpt is not None
+            else "pass a checkpoint to be able to resume"
+        )
+        raise ExecutorBroken(f"{exc}; {where}") from None
     finally:
         if bar is not None:
             bar.close()
