@@ -22,6 +22,7 @@ from placement.surfaces import (
     surface_index,
     to_uv,
 )
+from placement.workers import WorkerLost, WorkerPool
 
 __all__ = [
     "PEBCost",
@@ -50,4 +51,6 @@ __all__ = [
     "relax_select",
     "surface_index",
     "to_uv",
+    "WorkerLost",
+    "WorkerPool",
 ]

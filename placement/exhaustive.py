@@ -34,6 +34,7 @@ import numpy as np
 
 from analysis.fim import SINGULAR_RTOL
 from placement.surfaces import candidate_grid, on_surfaces
+from simulation import checks
 from simulation.room import Room
 
 CRITERIA = ("A", "D", "minimax")
@@ -85,12 +86,13 @@ def design_inputs(
     spacing: float = DEFAULT_SPACING,
 ) -> DesignInputs:
     """Check the arguments of a selection problem; raise ``ValueError`` naming the problem."""
-    if criterion not in CRITERIA:
-        raise ValueError(f"criterion: must be one of {CRITERIA}, got {criterion!r}")
+    if not isinstance(room, Room):
+        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    checks.choice("criterion", criterion, CRITERIA)
     if candidates is None:
         cand = candidate_grid(room, spacing)
     else:
-        cand = np.asarray(candidates, dtype=float)
+        cand = checks.reals("candidates", candidates)
         if cand.ndim != 2 or cand.shape[1] != 3 or cand.shape[0] == 0:
             raise ValueError(f"candidates: expected shape (N, 3) with N >= 1, got {cand.shape}")
         if not np.all(np.isfinite(cand)):
@@ -111,12 +113,9 @@ def design_inputs(
     if nodes is None:
         p = room.grid()
     else:
-        p = np.asarray(nodes, dtype=float)
-        if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] == 0:
-            raise ValueError(f"nodes: expected shape (P, 3) with P >= 1, got {p.shape}")
-        if not np.all(np.isfinite(p)):
-            raise ValueError("nodes: must be finite (no NaN or inf)")
-    s = np.asarray(sigma, dtype=float)
+        p = checks.points("nodes", nodes)
+        checks.inside("nodes", p, room.size)
+    s = checks.reals("sigma", sigma)
     if s.ndim == 0:
         s = np.full(N, float(s))
     if s.shape == (p.shape[0], N):
@@ -266,6 +265,7 @@ def exhaustive_search(
     subsets are kept. Raises ``ValueError`` on bad input.
     """
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
+    max_subsets = checks.count("max_subsets", max_subsets, low=1)
     N, M = inp.candidates.shape[0], inp.M
     n_total = math.comb(N, M)
     if n_total > max_subsets:
@@ -273,9 +273,7 @@ def exhaustive_search(
             f"M: C({N}, {M}) = {n_total} subsets exceeds max_subsets = {max_subsets}; "
             "use fewer candidates or relax_select"
         )
-    if isinstance(top_k, bool) or int(top_k) != top_k or top_k < 1:
-        raise ValueError(f"top_k: must be an integer >= 1, got {top_k!r}")
-    top_k = min(int(top_k), n_total)
+    top_k = min(checks.count("top_k", top_k, low=1), n_total)
     t0 = time.perf_counter()
     G = np.ascontiguousarray(inp.table())  # (6, N, P)
     ia, ib = np.triu_indices(N, 1)  # all pairs, lexicographic: pairs with a >= k are a tail

@@ -40,6 +40,7 @@ import numpy as np
 
 from analysis.fim import peb
 from placement.surfaces import from_uv, mounting_surfaces, on_surfaces, to_uv
+from simulation import checks
 from simulation.room import Room
 
 log = logging.getLogger(__name__)
@@ -218,27 +219,24 @@ def refine_peb(
     :class:`RefineResult` when ``return_info``. Bad input raises ``ValueError``.
     """
     t0 = time.perf_counter()
-    a0 = room.check_anchors(anchors, min_anchors=4)
+    a0 = room.check_anchors(checks.reals("anchors", anchors), min_anchors=4)
+    checks.distinct("anchors", a0)
     M = a0.shape[0]
     if not np.all(on_surfaces(room, a0, tol=1e-6)):
         raise ValueError(
             f"anchors: every anchor must lie on an allowed mounting surface {list(room.mounting)}"
             " (use placement.project)"
         )
-    if objective not in OBJECTIVES:
-        raise ValueError(f"objective: must be one of {OBJECTIVES}, got {objective!r}")
-    if hessian not in ("limited-memory", "exact"):
-        raise ValueError(f"hessian: must be 'limited-memory' or 'exact', got {hessian!r}")
-    if isinstance(multistart, bool) or int(multistart) != multistart or multistart < 0:
-        raise ValueError(f"multistart: must be an integer >= 0, got {multistart!r}")
-    if isinstance(max_iter, bool) or int(max_iter) != max_iter or max_iter < 1:
-        raise ValueError(f"max_iter: must be an integer >= 1, got {max_iter!r}")
-    if not (np.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol: must be > 0, got {tol}")
-    p = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 3 or p.shape[0] == 0 or not np.all(np.isfinite(p)):
-        raise ValueError(f"nodes: expected finite (P, 3) positions with P >= 1, got {p.shape}")
-    s = np.asarray(sigma, dtype=float)
+    checks.choice("objective", objective, OBJECTIVES)
+    checks.choice("hessian", hessian, ("limited-memory", "exact"))
+    multistart = checks.count("multistart", multistart, low=0, high=10_000)
+    max_iter = checks.count("max_iter", max_iter, low=1, high=1_000_000)
+    tol = checks.real("tol", tol, low=0.0, low_open=True)
+    p = room.grid() if nodes is None else checks.points("nodes", nodes)
+    checks.inside("nodes", p, room.size)
+    verbose = checks.flag("verbose", verbose)
+    return_info = checks.flag("return_info", return_info)
+    s = checks.reals("sigma", sigma)
     s = np.full(M, float(s)) if s.ndim == 0 else s
     if s.shape != (M,) or not (np.all(np.isfinite(s)) and np.all(s > 0)):
         raise ValueError(f"sigma: expected finite values > 0 m, scalar or shape ({M},)")
@@ -249,10 +247,8 @@ def refine_peb(
     if objective == "smoothmax":
         if temperature is None:
             tau = 0.05 * float(peb0.mean()) if np.all(np.isfinite(peb0)) else 1.0
-        elif np.isfinite(temperature) and temperature > 0:
-            tau = float(temperature)
         else:
-            raise ValueError(f"temperature: must be > 0 m, got {temperature}")
+            tau = checks.real("temperature", temperature, low=0.0, low_open=True, unit="m")
     f0 = _objective_value(peb0, objective, tau)
 
     def result(anchors, status, success, accepted, iterations, starts):
@@ -311,7 +307,7 @@ def refine_peb(
         log.warning("refine_peb: could not build the CasADi problem: %s", exc)
         return done(result(a0, f"error: {exc}", False, False, 0, 0))
 
-    rng = np.random.default_rng(seed)
+    rng = checks.rng("seed", seed)
     starts = [x0] + [rng.uniform(lbx, ubx) for _ in range(int(multistart))]
     best = None  # (value, anchors, status, success, iterations)
     last_status = "no_start"
@@ -338,6 +334,10 @@ def refine_peb(
     if best is None:
         return done(result(a0, last_status, False, False, 0, len(starts)))
     val, cand, status, success, iters = best
+    try:  # anchors moved onto each other: not a valid layout
+        checks.distinct("anchors", cand)
+    except ValueError as exc:
+        return done(result(a0, f"duplicate_anchors: {exc}", False, False, iters, len(starts)))
     if not val < f0:
         return done(result(a0, "no_improvement", success, False, iters, len(starts)))
     return done(result(cand, status, success, True, iters, len(starts)))

@@ -59,6 +59,7 @@ from placement.exhaustive import (
     design_inputs,
     node_values,
 )
+from simulation import checks
 from simulation.room import Room
 
 log = logging.getLogger(__name__)
@@ -423,10 +424,11 @@ def relax_select(
     """
     t_start = time.perf_counter()
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
-    for name, val in (("samples", samples), ("starts", starts)):
-        if isinstance(val, bool) or int(val) != val or val < 1:
-            raise ValueError(f"{name}: must be an integer >= 1, got {val!r}")
-    rng = np.random.default_rng(seed)
+    samples = checks.count("samples", samples, low=1, high=100_000)
+    starts = checks.count("starts", starts, low=1, high=10_000)
+    if solver_opts is not None:
+        checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
+    rng = checks.rng("seed", seed)
     G = inp.table()
     N, M = G.shape[1], inp.M
     wv, lam, solver_status, solver_value, compile_time, solve_time, info = _solve(

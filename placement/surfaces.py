@@ -8,12 +8,17 @@ least ``anchor_offset`` in from the neighbouring planes. A point on a surface is
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from simulation import checks
 from simulation.directivity import aim_vectors
 from simulation.room import SURFACES, Room
+
+#: most candidate points :func:`candidate_grid` makes, and most anchors of a random layout
+MAX_CANDIDATES, MAX_LAYOUT_ANCHORS = 1_000_000, 100_000
 
 
 @dataclass(frozen=True)
@@ -80,9 +85,9 @@ def project(room: Room, points) -> np.ndarray:
     Each point goes to the closest point of the closest rectangle, so an anchor may jump
     from one surface to another. Returns (..., 3).
     """
-    p = np.asarray(points, dtype=float)
-    if not np.all(np.isfinite(p)):
-        raise ValueError("points: must be finite (no NaN or inf)")
+    p = checks.reals("points", points)
+    if p.ndim < 1 or p.shape[-1] != 3:
+        raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
     lo, hi = _bounds(room)
     cand = np.clip(p[..., None, :], lo, hi)  # (..., S, 3)
     dist = np.sum((cand - p[..., None, :]) ** 2, axis=-1)
@@ -133,8 +138,16 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
     Each rectangle side gets ⌈length/spacing⌉ + 1 evenly spaced points including both
     edges. Shared edges between surfaces are not duplicated (they are 3 cm apart).
     """
-    if not (np.isfinite(spacing) and spacing > 0):
-        raise ValueError(f"spacing: must be > 0 m, got {spacing}")
+    spacing = checks.real("spacing", spacing, low=0.0, low_open=True, unit="m")
+    n = 0
+    for s in mounting_surfaces(room):
+        sides = zip(s.lower, s.upper, strict=True)
+        n += math.prod(max(2, math.ceil((hi - lo) / spacing - 1e-9) + 1) for lo, hi in sides)
+    if n > MAX_CANDIDATES:
+        raise ValueError(
+            f"spacing: {spacing:g} m gives {n:.3g} candidate points, more than {MAX_CANDIDATES}; "
+            "use a larger spacing"
+        )
     pts = []
     for s in mounting_surfaces(room):
         axes = [
@@ -148,8 +161,7 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
 
 def area_counts(room: Room, M: int) -> np.ndarray:
     """Anchors per surface in proportion to area (largest remainder): M = 4 → 1, 1, 2."""
-    if int(M) != M or M < 1:
-        raise ValueError(f"M: number of anchors must be an integer >= 1, got {M}")
+    M = checks.count("M", M, low=1, high=MAX_LAYOUT_ANCHORS)
     areas = np.array([s.area for s in mounting_surfaces(room)])
     share = M * areas / areas.sum()
     counts = np.floor(share).astype(int)
@@ -160,7 +172,7 @@ def area_counts(room: Room, M: int) -> np.ndarray:
 
 def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
     """(M, 3) anchors uniformly random on the surfaces, counts by :func:`area_counts`."""
-    rng = np.random.default_rng(rng)
+    rng = checks.rng("rng", rng)
     out = []
     for s, n in zip(mounting_surfaces(room), area_counts(room, M), strict=True):
         uv = rng.uniform(s.lower, s.upper, size=(n, 2))

@@ -59,7 +59,6 @@ class RangingScene:
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
         self.room = room
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
-        checks.distinct("anchors", self.anchors)
         self.nodes = room.grid() if nodes is None else _check_nodes(nodes, room)
         self.chirp = Chirp() if chirp is None else chirp
         self.receiver = Receiver() if receiver is None else receiver
@@ -134,6 +133,7 @@ def simulate_ranges(
     1 mm apart; nodes must be inside the room.
     """
     rng = checks.rng("rng", rng)
+    checks.distinct("anchors", room.check_anchors(checks.reals("anchors", anchors), 1))
     scene = RangingScene(
         room,
         anchors,
@@ -315,6 +315,7 @@ def evaluate_layout(
     if not isinstance(room, Room):
         raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
     anchors = room.check_anchors(checks.reals("anchors", anchors))
+    checks.distinct("anchors", anchors)
     realizations = checks.count("realizations", realizations, low=1)
     seed = checks.seed("seed", seed)
     noise = checks.flag("noise", noise)
