@@ -15,6 +15,8 @@ the same result serially, on a process pool, on Dask, and after a resume.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import hashlib
 import inspect
 import json
@@ -57,6 +59,24 @@ class ExecutorBroken(RuntimeError):
 
 class EvaluationTimeout(Exception):
     """An evaluation of the cost exceeded ``eval_timeout``."""
+
+
+_EVAL_TIMEOUT: contextvars.ContextVar[float | None] = contextvars.ContextVar(
+    "eval_timeout", default=None
+)
+
+
+@contextlib.contextmanager
+def default_eval_timeout(seconds: float | None):
+    """Within the block, :func:`pso` calls that pass no ``eval_timeout`` use ``seconds``
+    (for callers, such as ``seed_then_pso``, that do not pass it through)."""
+    if seconds is not None:
+        seconds = checks.real("eval_timeout", seconds, low=0.0, low_open=True, unit="s")
+    token = _EVAL_TIMEOUT.set(seconds)
+    try:
+        yield
+    finally:
+        _EVAL_TIMEOUT.reset(token)
 
 
 #: upper limits of the swarm's size and length, and of the number of anchors
@@ -474,6 +494,8 @@ def pso(
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
     if cost_label is not None and not isinstance(cost_label, str):
         raise ValueError(f"cost_label: must be a string or None, got {checks.describe(cost_label)}")
+    if eval_timeout is None:
+        eval_timeout = _EVAL_TIMEOUT.get()
     if eval_timeout is not None:
         eval_timeout = checks.real("eval_timeout", eval_timeout, low=0.0, low_open=True, unit="s")
         if executor is None and not _can_alarm():

@@ -394,9 +394,9 @@ def input_dir(name: str, path: Any) -> Path:
     """An existing, readable directory."""
     p = _path(name, path)
     if not p.exists():
-        raise ValueError(f"{name} {p}: no such directory")
+        raise ValueError(f"{name} {p}: not a folder (no such directory)")
     if not p.is_dir():
-        raise ValueError(f"{name} {p}: is not a directory")
+        raise ValueError(f"{name} {p}: not a folder (it is a file)")
     if not os.access(p, os.R_OK | os.X_OK):
         raise ValueError(f"{name} {p}: not readable (permission denied)")
     return p

@@ -32,7 +32,7 @@ from simulation.room import Room
 #: noise samples held in memory at once when chunking realizations (bytes)
 NOISE_BUDGET_BYTES = 64 * 2**20
 #: bytes held per (realization, node, anchor) by evaluate_layout and locate, an estimate
-_BYTES_PER_RANGE = 8 * 16
+BYTES_PER_RANGE = 8 * 16
 PRECISIONS = ("float64", "float32")
 
 
@@ -333,7 +333,7 @@ def evaluate_layout(
     n_nodes = len(room.grid()) if nodes is None else len(_check_nodes(nodes, room))
     checks.check_size(
         "realizations",
-        realizations * n_nodes * len(anchors) * _BYTES_PER_RANGE,
+        realizations * n_nodes * len(anchors) * BYTES_PER_RANGE,
         value=realizations,
         hint=f"{n_nodes} nodes x {len(anchors)} anchors per realization; use fewer",
     )

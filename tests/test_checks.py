@@ -137,7 +137,7 @@ def test_paths(tmp_path):
     with pytest.raises(ValueError, match="--layout .*: is a directory"):
         checks.input_file("--layout", tmp_path)
     assert checks.input_dir("RESULT_DIR", tmp_path) == tmp_path
-    with pytest.raises(ValueError, match="RESULT_DIR .*: is not a directory"):
+    with pytest.raises(ValueError, match="RESULT_DIR .*: not a folder"):
         checks.input_dir("RESULT_DIR", f)
     with pytest.raises(ValueError, match="--out .*: is a directory, expected a file name"):
         checks.output_path("--out", tmp_path)

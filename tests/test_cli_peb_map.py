@@ -29,7 +29,7 @@ def test_peb_map_cli_default_corners_and_errors(tmp_path, capsys):
     assert main(["peb-map", "--out", str(out), "--dpi", "30"]) == 0
     assert png_size(out) == (210, 126)  # default single panel 7 × 4.2 in
     assert main(["peb-map", "--out", str(tmp_path / "x.png"), "--height", "9"]) == 2
-    assert "value" in capsys.readouterr().err
+    assert "--height" in capsys.readouterr().err
     assert main(["peb-map", "--out", str(tmp_path / "x.png"), "--sigma", "0"]) == 2
     assert "--sigma" in capsys.readouterr().err
     assert main(["peb-map", "--out", str(tmp_path / "x.gif")]) == 2

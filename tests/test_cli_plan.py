@@ -51,8 +51,11 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
     # all were placed in the swarm and scored with the simulated cost
     assert [s["name"] for s in res["seeds"]] == ["simulated-1", "relax-A"]
     assert res["settings"]["seed_search"]["nfev"] > 0
-    assert all(s["cost"] > 0 for s in res["seeds"])
-    assert res["history"][-1] <= min(s["cost"] for s in res["seeds"])
+    # on this coarse grid the simulated seed is 4 collinear ceiling points (PEB inf): the
+    # swarm scores a degenerate layout inf (null in the JSON), so it is never the answer
+    costs = [s["cost"] for s in res["seeds"]]
+    assert all(c is None or c > 0 for c in costs)
+    assert res["history"][-1] <= min(c for c in costs if c is not None)
     # the finalists were re-scored and the lowest re-scored one is the answer
     best = min(res["finalists"], key=lambda f: f["cost"])
     np.testing.assert_array_equal(anchors, np.array(best["anchors"]))
@@ -64,6 +67,6 @@ def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
 
 def test_plan_bad_input_exit_2(tmp_path, capsys):
     assert main(["plan", "--anchors", "3", "--out", str(tmp_path)]) == 2
-    assert "M" in capsys.readouterr().err
+    assert "--anchors" in capsys.readouterr().err
     assert main(["plan", "--particles", "1", "--out", str(tmp_path)]) == 2
     assert "particles" in capsys.readouterr().err

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from analysis import error_stats, peb
-from placement.cli.common import add_room_argument, load_layout, load_room, write_json
+from analysis.noise import SIGMA_RANGE
+from placement.cli.common import add_room_argument, load_layout, load_room, output_file, write_json
+from simulation import checks
 
 
 def register(sub) -> None:
@@ -23,15 +23,20 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    if args.out is not None:
+        output_file("--out", args.out)
+    lo, hi = SIGMA_RANGE
+    checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
     room = load_room(args.room)
-    if args.sigma is None or not np.isfinite(args.sigma) or args.sigma <= 0:
-        raise ValueError(f"--sigma: must be > 0 m, got {args.sigma}")
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()
     values = peb(anchors, nodes, sigma=args.sigma)
     stats = error_stats(values)
     print(f"room {room.name} {room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m")
     print(f"{len(anchors)} anchors, {len(nodes)} nodes, range sigma {args.sigma:g} m")
+    geometry = checks.geometry(anchors)
+    if geometry != "3d":
+        print(f"note: the anchors are {geometry}")
     print("PEB = sqrt(tr J^-1) in metres over the grid:")
     print(
         f"  mean {stats.mean:.4f}  median {stats.median:.4f}  P95 {stats.p95:.4f}  "

@@ -9,9 +9,18 @@ from typing import Any
 import numpy as np
 
 from placement.serialization import to_jsonable
+from simulation import checks
 from simulation.room import Room
 
-__all__ = ["add_room_argument", "load_layout", "load_room", "to_jsonable", "write_json"]
+__all__ = [
+    "add_room_argument",
+    "load_layout",
+    "load_room",
+    "output_dir",
+    "output_file",
+    "to_jsonable",
+    "write_json",
+]
 
 
 def add_room_argument(parser) -> None:
@@ -25,22 +34,40 @@ def add_room_argument(parser) -> None:
 
 def load_room(path: str | None) -> Room:
     """The room from a TOML file, or the techtile room when ``path`` is None."""
-    return Room.techtile() if path is None else Room.from_toml(path)
+    if path is None:
+        return Room.techtile()
+    checks.input_file("--room", path)
+    return Room.from_toml(path)
 
 
 def load_layout(path: str, room: Room, min_anchors: int = 4) -> np.ndarray:
     """(M, 3) anchors from a JSON file ``{"anchors": [[x, y, z], ...]}``, validated."""
+    p = checks.input_file("--layout", path)
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(p.read_text())
+    except UnicodeDecodeError:
+        raise ValueError(f"--layout {path}: not a text (JSON) file") from None
     except json.JSONDecodeError as exc:
         raise ValueError(f"--layout {path}: not valid JSON ({exc})") from None
     if not isinstance(data, dict) or "anchors" not in data:
         raise ValueError(f'--layout {path}: expected an object {{"anchors": [[x, y, z], ...]}}')
     try:
-        anchors = np.array(data["anchors"], dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"--layout {path}: anchors must be a list of [x, y, z] numbers") from None
-    return room.check_anchors(anchors, min_anchors=min_anchors)
+        anchors = checks.points("anchors", data["anchors"])
+        anchors = room.check_anchors(anchors, min_anchors=min_anchors)
+        checks.distinct("anchors", anchors)
+    except ValueError as exc:
+        raise ValueError(f"--layout {path}: {exc}") from None
+    return anchors
+
+
+def output_dir(name: str, path) -> Path:
+    """An output folder that can be created or written, checked before any work."""
+    return checks.output_path(name, path, kind="dir")
+
+
+def output_file(name: str, path, suffixes=None) -> Path:
+    """An output file that can be written, checked before any work."""
+    return checks.output_path(name, path, kind="file", suffixes=suffixes)
 
 
 def write_json(path: str | Path, obj: Any) -> Path:

@@ -5,7 +5,14 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from placement.cli.common import add_room_argument, load_layout, load_room, write_json
+from placement.cli.common import (
+    add_room_argument,
+    load_layout,
+    load_room,
+    output_dir,
+    write_json,
+)
+from simulation import checks
 
 
 def register(sub) -> None:
@@ -31,11 +38,21 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from simulation import evaluate_layout
+    from simulation.evaluation import BYTES_PER_RANGE
+    from simulation.noise import check_snr
 
+    out_dir = output_dir("--out", args.out)
+    checks.count("--realizations", args.realizations, low=1)
+    checks.count("--seed", args.seed, low=0)
+    check_snr("--snr", args.snr)
     room = load_room(args.room)
     anchors = load_layout(args.layout, room)
-    if args.realizations is None or args.realizations < 1:
-        raise ValueError(f"--realizations: must be an integer >= 1, got {args.realizations}")
+    checks.check_size(
+        "--realizations",
+        args.realizations * len(room.grid()) * len(anchors) * BYTES_PER_RANGE,
+        value=args.realizations,
+        hint="use fewer realizations",
+    )
     t0 = time.perf_counter()
     ev = evaluate_layout(
         room, anchors, realizations=args.realizations, seed=args.seed, snr_db=args.snr
@@ -43,7 +60,7 @@ def run(args) -> int:
     seconds = time.perf_counter() - t0
     data = ev.to_dict()
     data["seconds"] = seconds
-    out = write_json(Path(args.out) / "evaluation.json", data)
+    out = write_json(Path(out_dir) / "evaluation.json", data)
     st = ev.stats
     print(f"room {room.name} {room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m")
     print(
@@ -55,6 +72,8 @@ def run(args) -> int:
         f"  std {st['std']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}  "
         f"rms {st['rms']:.4f}  median {st['median']:.4f}  max {st['max']:.4f}"
     )
+    if ev.geometry != "3d":
+        print(f"  the anchors are {ev.geometry}: positions may be ambiguous (see anchor_geometry)")
     if ev.n_unconverged:
         print(f"  {ev.n_unconverged} position fix(es) did not converge (flagged in the JSON)")
     print(f"wrote {out}")

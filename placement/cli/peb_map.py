@@ -3,9 +3,16 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
-from placement.cli.common import add_room_argument, load_layout, load_room
+from placement.cli.common import add_room_argument, load_layout, load_room, output_file
+from simulation import checks
+
+#: limits that keep a map's memory and time bounded
+MAX_CELLS = 4_000_000  # PEB cells per panel
+MAX_PIXELS = 50_000_000  # pixels of the image
+MAX_PANELS = 24
+DPI_RANGE = (10.0, 2400.0)
+SIZE_RANGE = (1.0, 100.0)  # inches
 
 
 def register(sub) -> None:
@@ -35,23 +42,42 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _positive(name: str, v) -> None:
-    if v is not None and not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name}: must be > 0, got {v}")
-
-
 def run(args) -> int:
     from analysis import figures
+    from analysis.noise import SIGMA_RANGE
 
-    room = load_room(args.room)
-    for name in ("--sigma", "--resolution", "--dpi", "--vmax"):
-        _positive(name, getattr(args, name[2:].replace("-", "_")))
+    out = output_file("--out", args.out, suffixes=(".png", ".svg", ".pdf"))
+    lo, hi = SIGMA_RANGE
+    checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+    checks.real("--resolution", args.resolution, low=0.0, low_open=True, unit="m")
+    checks.real("--dpi", args.dpi, low=DPI_RANGE[0], high=DPI_RANGE[1])
+    if args.vmax is not None:
+        checks.real("--vmax", args.vmax, low=0.0, low_open=True, unit="m")
     if args.size is not None:
         for v in args.size:
-            _positive("--size", v)
-    out = Path(args.out)
-    if out.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise ValueError(f"--out: use a .png, .svg or .pdf file name, got {out.name!r}")
+            checks.real("--size", v, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="inches")
+    room = load_room(args.room)
+    planes = [("--height", 2, z) for z in args.height or ()]
+    planes += [("--x-cut", 0, x) for x in args.x_cut] + [("--y-cut", 1, y) for y in args.y_cut]
+    if len(planes) > MAX_PANELS:
+        raise ValueError(
+            f"--height/--x-cut/--y-cut: at most {MAX_PANELS} panels, got {len(planes)}"
+        )
+    for name, axis, value in planes:
+        checks.real(name, value, low=0.0, high=room.size[axis], unit="m")
+    for _, axis, _ in planes or [("--height", 2, None)]:
+        u, v = (room.size[i] for i in range(3) if i != axis)
+        cells = max(2, math.ceil(u / args.resolution)) * max(2, math.ceil(v / args.resolution))
+        if cells > MAX_CELLS:
+            raise ValueError(
+                f"--resolution: {args.resolution:g} m gives {cells:.3g} cells per panel, more "
+                f"than {MAX_CELLS}; use a coarser resolution"
+            )
+    if args.size is not None and args.size[0] * args.size[1] * args.dpi**2 > MAX_PIXELS:
+        raise ValueError(
+            f"--size/--dpi: {args.size[0]:g} x {args.size[1]:g} inches at {args.dpi:g} dpi is "
+            f"{args.size[0] * args.size[1] * args.dpi**2:.3g} pixels, more than {MAX_PIXELS}"
+        )
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     fig = figures.peb_map(
         room,
@@ -66,7 +92,12 @@ def run(args) -> int:
         figsize=None if args.size is None else tuple(args.size),
         dpi=args.dpi,
     )
-    figures.save(fig, out)
     w, h = (round(v * args.dpi) for v in fig.get_size_inches())
+    if w * h > MAX_PIXELS:
+        raise ValueError(
+            f"--dpi: {args.dpi:g} dpi gives a {w} x {h} pixel image, more than {MAX_PIXELS} "
+            "pixels; lower --dpi or --size"
+        )
+    figures.save(fig, out)
     print(f"wrote {out} ({w} x {h} px, {len(anchors)} anchors, sigma {args.sigma:g} m)")
     return 0

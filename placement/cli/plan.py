@@ -3,12 +3,20 @@
 from __future__ import annotations
 
 import contextlib
-import os
+import re
 import time
-from pathlib import Path
 
-from placement.cli.common import add_room_argument, load_room, write_json
+from placement.cli.common import add_room_argument, load_room, output_dir, write_json
 from placement.costs import COST_NAMES
+from placement.workers import available_cores
+from simulation import checks
+
+#: seconds to wait for a Dask scheduler before giving up
+SCHEDULER_TIMEOUT = 5
+#: limits of the command line's numbers (the library's are wider)
+MAX_WORKERS = 1024
+MAX_REALIZATIONS = 1000
+MAX_SEARCH_CANDIDATES = 10_000
 
 
 def register(sub) -> None:
@@ -71,46 +79,121 @@ def register(sub) -> None:
     )
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://...)")
     p.add_argument("--checkpoint", metavar="PATH", help="checkpoint file; resumes if present")
+    p.add_argument(
+        "--eval-timeout",
+        type=float,
+        metavar="SECONDS",
+        help="a particle evaluation taking longer costs inf (default: no limit)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--out", metavar="DIR", default="anchorplan-out", help="output folder")
     p.set_defaults(func=run)
 
 
+def _connect(address: str, stack: contextlib.ExitStack):
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise ValueError("--scheduler needs dask: pip install 'anchorplan[dask]'") from None
+    if not re.fullmatch(r"([a-z]+://)?[^\s:/]+:\d+", address):
+        raise ValueError(f"--scheduler: expected an address like tcp://host:8786, got {address!r}")
+    try:
+        client = Client(address, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ValueError(
+            f"--scheduler {address}: cannot connect within {SCHEDULER_TIMEOUT} s "
+            f"({' '.join(str(exc).split())})"
+        ) from None
+    stack.enter_context(client)
+    return client.get_executor()
+
+
 def _executor(args, stack: contextlib.ExitStack):
-    if args.scheduler and args.workers > 0:
-        raise ValueError("--scheduler and --workers: choose one")
     if args.scheduler:
-        try:
-            from dask.distributed import Client
-        except ImportError:
-            raise ValueError("--scheduler needs dask: pip install 'anchorplan[dask]'") from None
-        client = stack.enter_context(Client(args.scheduler))
-        return client.get_executor()
-    if args.workers < 0:
-        raise ValueError(f"--workers: must be >= 0 (0: one per core), got {args.workers}")
+        return _connect(args.scheduler, stack)
     workers = args.workers or available_cores()
     if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
+        from placement.workers import WorkerPool
 
-        return stack.enter_context(ProcessPoolExecutor(max_workers=workers))
+        return stack.enter_context(WorkerPool(max_workers=workers))
     return None
 
 
-def available_cores() -> int:
-    """Cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        return os.cpu_count() or 1
+def _check_args(args, room) -> None:
+    """Every number and file of the command, checked before any work."""
+    from placement.exhaustive import DEFAULT_SPACING
+    from placement.pso import MAX_ANCHORS, MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
+    from placement.surfaces import candidate_grid
+    from simulation.evaluation import BYTES_PER_RANGE
+
+    checks.count("--particles", args.particles, low=2, high=MAX_PARTICLES)
+    checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
+    checks.count("--realizations", args.realizations, low=1, high=MAX_REALIZATIONS)
+    checks.count("--validate-realizations", args.validate_realizations, low=0)
+    checks.count("--finalists", args.finalists, low=1, high=args.particles)
+    checks.count(
+        "--finalist-realizations", args.finalist_realizations, low=1, high=MAX_REALIZATIONS
+    )
+    checks.count("--seed", args.seed, low=0)
+    checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
+    if args.scheduler and args.workers > 0:
+        raise ValueError("--scheduler and --workers: choose one")
+    if args.eval_timeout is not None:
+        checks.real("--eval-timeout", args.eval_timeout, low=0.0, low_open=True, unit="s")
+    if args.search_starts is not None:
+        checks.count("--search-starts", args.search_starts, low=0, high=10_000)
+    if args.search_realizations is not None:
+        checks.count("--search-realizations", args.search_realizations, low=1, high=100)
+    M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
+    if not args.no_seeds:
+        n = len(candidate_grid(room, DEFAULT_SPACING))
+        if M > n:
+            raise ValueError(
+                f"--anchors: {M} anchors exceed the {n} candidate points of the seeds' "
+                f"relaxation in this room; use at most {n} or --no-seeds"
+            )
+        if args.cost != "peb" and args.search_starts != 0:
+            spacing = 0.6 if args.search_spacing is None else args.search_spacing
+            checks.real("--search-spacing", spacing, low=0.0, low_open=True, unit="m")
+            n = len(candidate_grid(room, spacing))
+            if n > MAX_SEARCH_CANDIDATES:
+                raise ValueError(
+                    f"--search-spacing: {spacing:g} m gives {n} candidate points, more than "
+                    f"{MAX_SEARCH_CANDIDATES}; use a larger spacing"
+                )
+            if M > n:
+                raise ValueError(
+                    f"--anchors: {M} anchors exceed the {n} candidate points of the seed "
+                    f"search (--search-spacing {spacing:g} m)"
+                )
+    elif args.search_spacing is not None:
+        checks.real("--search-spacing", args.search_spacing, low=0.0, low_open=True, unit="m")
+    checks.check_size(
+        "--validate-realizations",
+        args.validate_realizations * len(room.grid()) * M * BYTES_PER_RANGE,
+        value=args.validate_realizations,
+        hint="use fewer realizations",
+    )
+    if args.checkpoint is not None:
+        checks.output_path("--checkpoint", args.checkpoint)
+        state = load_checkpoint(args.checkpoint)  # a damaged file fails here, not at the end
+        if state is not None:
+            print(
+                f"checkpoint {args.checkpoint}: found (iteration {state['iteration']}); "
+                "it is resumed if it was written by this same command",
+                flush=True,
+            )
 
 
 def run(args) -> int:
     from numpy import array_equal as np_equal
 
     from placement.plan import seed_then_pso
+    from placement.pso import default_eval_timeout
 
+    out = output_dir("--out", args.out)
     room = load_room(args.room)
-    out = Path(args.out)
+    _check_args(args, room)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
@@ -120,37 +203,49 @@ def run(args) -> int:
             f"{args.particles} particles x {args.iterations} iterations, seed {args.seed}",
             flush=True,
         )
-        res = seed_then_pso(
-            room,
-            args.anchors,
-            particles=args.particles,
-            iterations=args.iterations,
-            cost=args.cost,
-            realizations=args.realizations,
-            seeds=None if args.no_seeds else "auto",
-            search={
-                key: value
-                for key, value in (
-                    ("starts", args.search_starts),
-                    ("realizations", args.search_realizations),
-                    ("spacing", args.search_spacing),
-                )
-                if value is not None  # unset: the library's default
-            },
-            finalists=args.finalists,
-            finalist_realizations=args.finalist_realizations,
-            executor=executor,
-            seed=args.seed,
-            progress=not args.no_progress,
-            checkpoint=args.checkpoint,
-            validate_realizations=args.validate_realizations,
-        )
+        with default_eval_timeout(args.eval_timeout):
+            res = seed_then_pso(
+                room,
+                args.anchors,
+                particles=args.particles,
+                iterations=args.iterations,
+                cost=args.cost,
+                realizations=args.realizations,
+                seeds=None if args.no_seeds else "auto",
+                search={
+                    key: value
+                    for key, value in (
+                        ("starts", args.search_starts),
+                        ("realizations", args.search_realizations),
+                        ("spacing", args.search_spacing),
+                    )
+                    if value is not None  # unset: the library's default
+                },
+                finalists=args.finalists,
+                finalist_realizations=args.finalist_realizations,
+                executor=executor,
+                seed=args.seed,
+                progress=not args.no_progress,
+                checkpoint=args.checkpoint,
+                validate_realizations=args.validate_realizations,
+            )
     out.mkdir(parents=True, exist_ok=True)
     (out / "result.json").write_text(res.to_json(indent=1) + "\n")
     write_json(out / "layout.json", {"anchors": res.anchors})
     for s in res.seeds:
         print(f"  seed {s.name:<22} mean PEB {s.mean_peb:.4f} m   cost {s.cost:.4g}")
+    swarm = res.pso
+    extra = {} if swarm is None else swarm.extra
+    if extra.get("resumed_from") is not None:
+        print(f"resumed from checkpoint {args.checkpoint} after iteration {extra['resumed_from']}")
     print(f"PSO: {res.nit} iterations, {res.nfev} evaluations, {res.message}")
+    if swarm is not None and swarm.failures:
+        print(
+            f"  {swarm.failures} evaluation(s) failed and cost inf: "
+            f"{extra.get('lost', 0)} lost to dead worker processes, "
+            f"{extra.get('timeouts', 0)} over --eval-timeout, "
+            f"{swarm.failures - extra.get('lost', 0) - extra.get('timeouts', 0)} errors"
+        )
     for k, f in enumerate(res.finalists):
         mark = "*" if np_equal(f["anchors"], res.anchors) else " "
         print(

@@ -4,6 +4,12 @@ from __future__ import annotations
 
 import time
 
+from placement.cli.common import output_dir, output_file
+from simulation import checks
+
+DPI_RANGE = (10.0, 600.0)
+MAX_REALIZATIONS = 10_000
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -33,22 +39,41 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from analysis.report import write_report
+    from analysis.noise import SIGMA_RANGE
+    from analysis.report import load_results, write_report
 
-    if args.realizations is None or args.realizations < 0:
-        raise ValueError(f"--realizations: must be an integer >= 0, got {args.realizations}")
-    if args.dpi is None or not args.dpi > 0:
-        raise ValueError(f"--dpi: must be > 0, got {args.dpi}")
+    result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
+    if args.out is not None:
+        output_file("--out", args.out, suffixes=(".html", ".htm"))
+    else:
+        output_file("RESULT_DIR", result_dir / "report.html")
+    if args.figures is not None:
+        output_dir("--figures", args.figures)
+    checks.count("--realizations", args.realizations, low=0, high=MAX_REALIZATIONS)
+    checks.count("--seed", args.seed, low=0)
+    checks.real("--dpi", args.dpi, low=DPI_RANGE[0], high=DPI_RANGE[1])
+    if args.sigma is not None:
+        lo, hi = SIGMA_RANGE
+        checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+    try:
+        load_results(result_dir)
+    except (ValueError, FileNotFoundError) as exc:
+        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
     t0 = time.perf_counter()
-    path, rep = write_report(
-        args.result_dir,
-        args.out,
-        realizations=args.realizations,
-        seed=args.seed,
-        sigma=args.sigma,
-        dpi=args.dpi,
-        figures_dir=args.figures,
-    )
+    try:
+        path, rep = write_report(
+            result_dir,
+            args.out,
+            realizations=args.realizations,
+            seed=args.seed,
+            sigma=args.sigma,
+            dpi=args.dpi,
+            figures_dir=args.figures,
+        )
+    except (TypeError, KeyError, IndexError, AttributeError) as exc:  # malformed result files
+        raise ValueError(
+            f"RESULT_DIR {result_dir}: the result files are malformed ({type(exc).__name__}: {exc})"
+        ) from None
     for note in rep.notes:
         print(f"note: {note}")
     size = path.stat().st_size / 1024
