@@ -12,7 +12,7 @@ from placement.workers import available_cores
 from simulation import checks
 
 #: seconds to wait for a Dask scheduler before giving up
-SCHEDULER_TIMEOUT = 5
+SCHEDULER_TIMEOUT = 3
 #: limits of the command line's numbers (the library's are wider)
 MAX_WORKERS = 1024
 MAX_REALIZATIONS = 1000

@@ -58,7 +58,8 @@ def run(args) -> int:
     try:
         load_results(result_dir)
     except (ValueError, FileNotFoundError) as exc:
-        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
+        msg = str(exc) if "RESULT_DIR" in str(exc) else f"RESULT_DIR {result_dir}: {exc}"
+        raise ValueError(msg) from None
     t0 = time.perf_counter()
     try:
         path, rep = write_report(
