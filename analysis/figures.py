@@ -36,6 +36,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from analysis.fim import peb as _peb
+from simulation import checks
 from simulation.directivity import aim_vectors
 from simulation.room import SURFACES, Room
 
@@ -227,13 +228,16 @@ def peb_plane(
     if k not in (0, 1, 2):
         raise ValueError(f"axis: must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
     L = room.size
-    if not (0.0 <= float(value) <= L[k]):
-        raise ValueError(f"value: the {_AXES[k]} plane must lie in [0, {L[k]:g}] m, got {value}")
-    if not (resolution > 0 and math.isfinite(resolution)):
-        raise ValueError(f"resolution: must be > 0 m, got {resolution}")
+    value = checks.real("value", value, low=0.0, high=L[k], unit="m")
+    resolution = checks.real("resolution", resolution, low=0.0, low_open=True, unit="m")
     iu, iv = (i for i in range(3) if i != k)
     nu = max(2, math.ceil(L[iu] / resolution))
     nv = max(2, math.ceil(L[iv] / resolution))
+    if nu * nv > 4_000_000:
+        raise ValueError(
+            f"resolution: {resolution:g} m gives {nu * nv:.3g} cells, more than 4e6; use a "
+            "coarser resolution"
+        )
     u = (np.arange(nu) + 0.5) * (L[iu] / nu)
     v = (np.arange(nv) + 0.5) * (L[iv] / nv)
     pts = np.empty((nu, nv, 3))

@@ -127,6 +127,10 @@ def design_inputs(
         )
     if not (np.all(np.isfinite(s)) and np.all(s > 0)):
         raise ValueError("sigma: range standard deviations must be finite and > 0 m")
+    checks.check_size(
+        "candidates x nodes", 6 * N * p.shape[0] * 8 * 4, value=(N, p.shape[0]),
+        hint="use fewer candidates (a larger spacing) or nodes",
+    )  # fmt: skip
     return DesignInputs(cand, p, s, float(np.exp(np.mean(np.log(s)))), int(M), criterion)
 
 

@@ -64,6 +64,9 @@ from simulation.room import Room
 
 log = logging.getLogger(__name__)
 
+#: most candidate points of a relaxation (the problem has N weights and 36·P LMI entries)
+MAX_CANDIDATES = 5000
+
 #: (row, col) of the six unique entries (xx, yy, zz, xy, xz, yz) of a symmetric 3×3
 _IU = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 #: (row, col) of the six entries of a lower-triangular 3×3 Z (D criterion)
@@ -424,6 +427,11 @@ def relax_select(
     """
     t_start = time.perf_counter()
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
+    if len(inp.candidates) > MAX_CANDIDATES:
+        raise ValueError(
+            f"candidates: {len(inp.candidates)} points, more than the {MAX_CANDIDATES} the "
+            "relaxation handles; use a larger spacing"
+        )
     samples = checks.count("samples", samples, low=1, high=100_000)
     starts = checks.count("starts", starts, low=1, high=10_000)
     if solver_opts is not None:

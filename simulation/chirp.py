@@ -7,10 +7,11 @@ the receiver snaps to a peak of the carrier.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from simulation import checks
 
 
 @dataclass(frozen=True)
@@ -22,12 +23,9 @@ class Chirp:
     duration: float = 30e-3
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.f0) and self.f0 > 0):
-            raise ValueError(f"f0: must be > 0 Hz, got {self.f0}")
-        if not (math.isfinite(self.f1) and self.f1 > 0):
-            raise ValueError(f"f1: must be > 0 Hz, got {self.f1}")
-        if not (math.isfinite(self.duration) and self.duration > 0):
-            raise ValueError(f"duration: must be > 0 s, got {self.duration}")
+        for name in ("f0", "f1"):
+            checks.real(name, getattr(self, name), low=0.0, high=1e6, low_open=True, unit="Hz")
+        checks.real("duration", self.duration, low=0.0, high=1.0, low_open=True, unit="s")
 
     @property
     def rate(self) -> float:

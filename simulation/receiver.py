@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
+from simulation import checks
 from simulation.chirp import Chirp
 
 
@@ -55,20 +56,17 @@ class Receiver:
     lowpass_cutoff: float = 5e3
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.fs) and self.fs > 0):
-            raise ValueError(f"fs: must be > 0 Hz, got {self.fs}")
-        if not (math.isfinite(self.t_wake) and self.t_wake >= 0):
-            raise ValueError(f"t_wake: must be >= 0 s, got {self.t_wake}")
-        if int(self.window) != self.window or self.window < 2:
-            raise ValueError(f"window: must be an integer >= 2 samples, got {self.window}")
-        if not (0 < self.highpass_cutoff < self.fs / 2):
-            raise ValueError(f"highpass_cutoff: must be in (0, fs/2), got {self.highpass_cutoff}")
-        if not (0 < self.lowpass_cutoff < self.fs / 2):
-            raise ValueError(f"lowpass_cutoff: must be in (0, fs/2), got {self.lowpass_cutoff}")
-        if int(self.highpass_order) != self.highpass_order or self.highpass_order < 1:
-            raise ValueError(f"highpass_order: must be an integer >= 1, got {self.highpass_order}")
-        if int(self.lowpass_taps) != self.lowpass_taps or self.lowpass_taps < 1:
-            raise ValueError(f"lowpass_taps: must be an integer >= 1, got {self.lowpass_taps}")
+        checks.real("fs", self.fs, low=0.0, high=10e6, low_open=True, unit="Hz")
+        checks.real("t_wake", self.t_wake, low=0.0, high=1.0, unit="s")
+        checks.count("window", self.window, low=2, high=65536)
+        for name in ("highpass_cutoff", "lowpass_cutoff"):
+            v = checks.real(name, getattr(self, name), low=0.0, low_open=True, unit="Hz")
+            if not v < self.fs / 2:
+                raise ValueError(
+                    f"{name}: must be in (0, fs/2) = (0, {self.fs / 2:g}) Hz, got {v:g}"
+                )
+        checks.count("highpass_order", self.highpass_order, low=1, high=40)
+        checks.count("lowpass_taps", self.lowpass_taps, low=1, high=100_000)
 
     @property
     def window_times(self) -> np.ndarray:
@@ -198,6 +196,13 @@ class Dsp:
         self.precision = precision
         self.dtype = np.dtype(precision)
         N = receiver.window
+        n_ref = int(round(chirp.duration * receiver.fs))
+        checks.check_size(
+            "chirp duration x fs x window",
+            (n_ref + N) * N * 8 * 4,
+            value=(chirp.duration, receiver.fs, N),
+            hint="use a shorter chirp, a lower fs or a shorter window",
+        )
         ref = chirp.samples(receiver.fs)
         if len(ref) < 2:
             raise ValueError("chirp: shorter than two samples at the receiver's fs")

@@ -258,9 +258,10 @@ class Room:
         Ordered with x slowest and z fastest. The default gives the paper's 270 nodes with
         spacing 98.75 / 78.0 / 57.5 cm.
         """
-        shape = tuple(int(n) for n in shape)
-        if len(shape) != 3 or any(n < 1 for n in shape):
-            raise ValueError(f"shape: expected 3 integers >= 1, got {shape}")
+        if not isinstance(shape, Sequence | np.ndarray) or len(shape) != 3:
+            raise ValueError(f"shape: expected 3 integers >= 1, got {checks.describe(shape)}")
+        shape = tuple(checks.count("shape", n, low=1) for n in shape)
+        checks.check_size("shape", math.prod(shape) * 3 * 8 * 4, value=shape)
         m = self.node_margin
         axes = [
             np.linspace(m, L - m, n) if n > 1 else np.array([L / 2])
