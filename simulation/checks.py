@@ -221,6 +221,19 @@ def known_keys(name: str, keys: Iterable[Any], allowed: Iterable[str]) -> None:
         raise ValueError(f"{name}: unknown key(s) {unknown}; allowed: {allowed}")
 
 
+def _has_bool(value: Any, budget: int = 10_000) -> bool:
+    """Whether a (nested) list or tuple holds a bool (numpy would make it 0 or 1)."""
+    stack = [value]
+    while stack and budget > 0:
+        v = stack.pop()
+        budget -= 1
+        if isinstance(v, bool | np.bool_):
+            return True
+        if isinstance(v, list | tuple):
+            stack.extend(v)
+    return False
+
+
 def reals(
     name: str,
     value: Any,
@@ -235,7 +248,7 @@ def reals(
 ) -> np.ndarray:
     """A float array of real numbers with the given ``shape`` (None entries: any length),
     every entry finite (or +inf when ``allow_inf``) and within the bounds."""
-    if isinstance(value, str | bytes | Mapping) or value is None:
+    if isinstance(value, str | bytes | Mapping) or value is None or _has_bool(value):
         raise ValueError(f"{name}: must be an array of numbers, got {describe(value)}")
     try:
         raw = np.asarray(value)

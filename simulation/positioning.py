@@ -170,12 +170,12 @@ def locate(
     every node of that layout gets status −1 and ``converged = False``. Ranges below
     −1 m (a noisy range may be slightly negative) raise ``ValueError``.
     """
-    a = np.asarray(anchors, dtype=float)
+    a = checks.reals("anchors", anchors)
     if a.ndim not in (2, 3) or a.shape[-1] != 3 or a.shape[-2] < 3:
         raise ValueError(f"anchors: expected shape (M, 3) or (L, M, 3) with M >= 3, got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("anchors: must be finite")
-    rho = np.asarray(ranges, dtype=float)
+    rho = checks.reals("ranges", ranges)
     M = a.shape[-2]
     if rho.ndim < 1 or rho.shape[-1] != M:
         raise ValueError(f"ranges: expected shape (..., P, {M}), got {rho.shape}")

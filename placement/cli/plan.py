@@ -155,7 +155,10 @@ def _check_args(args, room) -> None:
         if args.cost != "peb" and args.search_starts != 0:
             spacing = 0.6 if args.search_spacing is None else args.search_spacing
             checks.real("--search-spacing", spacing, low=0.0, low_open=True, unit="m")
-            n = len(candidate_grid(room, spacing))
+            try:
+                n = len(candidate_grid(room, spacing))
+            except ValueError as exc:
+                raise ValueError(f"--search-{exc}") from None
             if n > MAX_SEARCH_CANDIDATES:
                 raise ValueError(
                     f"--search-spacing: {spacing:g} m gives {n} candidate points, more than "

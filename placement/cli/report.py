@@ -71,6 +71,9 @@ def run(args) -> int:
             dpi=args.dpi,
             figures_dir=args.figures,
         )
+    except ValueError as exc:
+        msg = str(exc) if "RESULT_DIR" in str(exc) else f"RESULT_DIR {result_dir}: {exc}"
+        raise ValueError(msg) from None
     except (TypeError, KeyError, IndexError, AttributeError) as exc:  # malformed result files
         raise ValueError(
             f"RESULT_DIR {result_dir}: the result files are malformed ({type(exc).__name__}: {exc})"
