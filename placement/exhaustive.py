@@ -270,6 +270,7 @@ def exhaustive_search(
     """
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
     max_subsets = checks.count("max_subsets", max_subsets, low=1)
+    top_k = checks.count("top_k", top_k, low=1)
     N, M = inp.candidates.shape[0], inp.M
     n_total = math.comb(N, M)
     if n_total > max_subsets:
@@ -277,7 +278,7 @@ def exhaustive_search(
             f"M: C({N}, {M}) = {n_total} subsets exceeds max_subsets = {max_subsets}; "
             "use fewer candidates or relax_select"
         )
-    top_k = min(checks.count("top_k", top_k, low=1), n_total)
+    top_k = min(top_k, n_total)
     t0 = time.perf_counter()
     G = np.ascontiguousarray(inp.table())  # (6, N, P)
     ia, ib = np.triu_indices(N, 1)  # all pairs, lexicographic: pairs with a >= k are a tail

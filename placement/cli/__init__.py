@@ -61,7 +61,10 @@ def main(argv: list[str] | None = None) -> int:
     exits 2; any other failure prints one line and exits 1 (130 on Ctrl-C).
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # usage errors (one line, 2) and --help (0)
+        return exc.code if isinstance(exc.code, int) else 2
     prefix = f"anchorplan {args.command}"
     handler = _Warnings(args.command)
     loggers = [logging.getLogger(n) for n in ("placement", "analysis", "simulation")]

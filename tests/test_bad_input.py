@@ -1,0 +1,436 @@
+"""Bad input is refused up front with a ValueError (API) or one line and exit code 2 (CLI)
+naming the argument or file, its value and what is allowed (issue #13)."""
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import analysis
+import placement
+from analysis import figures
+from placement.cli import main
+from placement.pso import PSOOptions, pso
+from simulation import Chirp, Receiver, Room, evaluate_layout, locate, simulate_ranges
+from simulation.multipath import image_indices
+
+ROOM = Room.techtile()
+A = ROOM.corners_layout()
+NODES = ROOM.grid()[::27]
+FAST = PSOOptions(particles=3, iterations=1)
+
+# values that are not integers: bools, fractions, strings, containers, NaN
+NOT_INTEGERS = st.one_of(
+    st.booleans(),
+    st.floats().filter(lambda x: not (math.isfinite(x) and x == int(x))),
+    st.text(max_size=4),
+    st.none(),
+    st.lists(st.integers(0, 5), min_size=1, max_size=2),
+)
+# values that are not real numbers
+NOT_REALS = st.one_of(
+    st.booleans(),
+    st.sampled_from([math.nan, math.inf, -math.inf]),
+    st.text(max_size=4),
+    st.none(),
+    st.lists(st.floats(0, 1), min_size=1, max_size=2),
+)
+QUICK = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+
+def refused(name, fn, *, within=5.0):
+    """fn() raises ValueError naming ``name``, within ``within`` seconds."""
+    t0 = time.monotonic()
+    with pytest.raises(ValueError) as exc:
+        fn()
+    assert time.monotonic() - t0 < within
+    msg = str(exc.value)
+    assert name in msg and "\n" not in msg, msg
+    return msg
+
+
+# -- integer arguments refuse bools, fractions and strings ----------------------------------
+@QUICK
+@given(NOT_INTEGERS)
+def test_room_max_order_is_an_integer(v):
+    refused("max_order", lambda: Room(max_order=v))
+
+
+@QUICK
+@given(NOT_INTEGERS)
+def test_evaluate_realizations_is_an_integer(v):
+    refused("realizations", lambda: evaluate_layout(ROOM, A, realizations=v, nodes=NODES))
+
+
+@QUICK
+@given(NOT_INTEGERS)
+def test_random_layout_anchor_count_is_an_integer(v):
+    refused("M", lambda: placement.random_layout(ROOM, v, 0))
+
+
+@QUICK
+@given(st.sampled_from(["particles", "iterations", "patience"]), NOT_INTEGERS)
+def test_pso_options_counts(field, v):
+    refused(field, lambda: PSOOptions(**{field: v}))
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: Room(max_order=True), "max_order"),
+        (lambda: Room(max_order=2.5), "max_order"),
+        (lambda: evaluate_layout(ROOM, A, realizations=True), "realizations"),
+        (lambda: evaluate_layout(ROOM, A, seed=1.7), "seed"),
+        (lambda: evaluate_layout(ROOM, A, chunk=0.5), "chunk"),
+        (lambda: evaluate_layout(ROOM, A, workers=0), "workers"),
+        (lambda: placement.random_layout(ROOM, True, 0), "M"),
+        (lambda: placement.relax_select(ROOM, 4, samples=True), "samples"),
+        (lambda: placement.refine_peb(ROOM, A, multistart=1.5), "multistart"),
+        (lambda: placement.exhaustive_search(ROOM, 4, top_k=True), "top_k"),
+        (lambda: locate(A, np.ones((2, 4)), max_iter=2.5), "max_iter"),
+        (lambda: ROOM.grid((1.5, 2, 2)), "shape"),
+        (lambda: image_indices(True), "max_order"),
+        (lambda: pso(lambda a, r: 1.0, ROOM, 4.5, options=FAST), "M"),
+        (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, seed=1.7), "seed"),
+        (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, chunksize=True), "chunksize"),
+        (lambda: Receiver(window=True), "window"),
+    ],
+)
+def test_counts_refuse_bools_and_fractions(call, name):
+    refused(name, call)
+
+
+def test_integral_floats_and_numpy_integers_are_counts():
+    assert Room(max_order=np.int64(2)).max_order == 2
+    assert Room(max_order=2.0).max_order == 2
+    assert placement.random_layout(ROOM, np.int32(5), 0).shape == (5, 3)
+
+
+# -- options ------------------------------------------------------------------------------
+def test_pso_options_must_be_pso_options():
+    for v in ({"particles": 4}, "fast"):
+        msg = refused("options", lambda v=v: pso(lambda a, r: 1.0, ROOM, 4, options=v))
+        assert "PSOOptions" in msg
+
+
+def test_cli_search_options_are_checked(tmp_path, capsys):
+    for opt, v in (("--search-starts", "-1"), ("--search-spacing", "0"),
+                   ("--search-realizations", "0"), ("--search-spacing", "1e-4")):  # fmt: skip
+        assert main(["plan", opt, v, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and opt in err, err
+
+
+def test_relax_solver_opts_is_a_mapping():
+    refused("solver_opts", lambda: placement.relax_select(ROOM, 4, solver_opts="x"))
+
+
+# -- bad input is an error, not a failed result ---------------------------------------------
+@pytest.mark.parametrize("cost", [5, "variance", None, lambda: 1.0, lambda a, b, c: 1.0])
+def test_pso_cost_must_be_callable_with_anchors_and_rng(cost):
+    refused("cost", lambda: pso(cost, ROOM, 4, options=FAST, seed=0))
+
+
+def peb_of(anchors):
+    return float(np.mean(analysis.peb(anchors, NODES)))
+
+
+def test_pso_accepts_a_one_argument_cost_as_seed_then_pso_does():
+    res = pso(peb_of, ROOM, 4, options=FAST, seed=0)
+    assert res.success and res.failures == 0 and np.isfinite(res.cost)
+
+
+def test_pso_refuses_an_unpicklable_cost_for_worker_processes():
+    with placement.WorkerPool(2) as ex:
+        refused("cost", lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, executor=ex))
+
+
+def test_pso_other_arguments():
+    refused("room", lambda: pso(peb_of, "techtile", 4, options=FAST))
+    refused("executor", lambda: pso(peb_of, ROOM, 4, options=FAST, executor="pool"))
+    refused("callback", lambda: pso(peb_of, ROOM, 4, options=FAST, callback="x"))
+    refused("initial", lambda: pso(peb_of, ROOM, 4, options=FAST, initial=np.zeros((2, 5, 3))))
+
+
+# -- geometry -----------------------------------------------------------------------------
+OUTSIDE = [[[9.0, 1.0, 1.0]], [[-0.5, 1.0, 1.0]], [[1.0, 1.0, 3.0]]]
+
+
+@pytest.mark.parametrize("nodes", OUTSIDE)
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda p: evaluate_layout(ROOM, A, nodes=p),
+        lambda p: simulate_ranges(ROOM, A, p),
+        lambda p: placement.relax_select(ROOM, 4, spacing=1.6, nodes=p),
+        lambda p: placement.exhaustive_search(ROOM, 4, spacing=3.0, nodes=p),
+        lambda p: placement.refine_peb(ROOM, A, nodes=p),
+    ],
+)
+def test_nodes_outside_the_room_are_refused(call, nodes):
+    msg = refused("nodes", lambda: call(nodes))
+    assert "outside the room" in msg
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.0005])
+def test_duplicated_anchors_are_refused(offset):
+    lay = np.vstack([A, A[:1] + [0, 0, offset]])
+    for call in (
+        lambda: evaluate_layout(ROOM, lay, nodes=NODES),
+        lambda: simulate_ranges(ROOM, lay, NODES),
+        lambda: placement.refine_peb(ROOM, lay),
+    ):
+        assert "1 mm apart" in refused("anchors", call)
+
+
+def test_anchors_anywhere_in_the_room_are_evaluated():
+    """Decision: evaluate/bounds/simulate_ranges take anchors anywhere inside the room
+    (an existing installation); only the optimizers keep them on the mounting surfaces."""
+    centre = np.array([[4.0, 2.0, 1.2], [1.0, 1.0, 0.5], [7.0, 3.0, 2.0], [2.0, 3.5, 1.5]])
+    ev = evaluate_layout(ROOM, centre, nodes=NODES)
+    assert ev.geometry == "3d" and np.all(np.isfinite(ev.errors))
+    refused("anchors", lambda: placement.refine_peb(ROOM, centre))  # refinement: on surfaces
+
+
+def test_collinear_anchors_are_flagged_not_reported_converged():
+    line = np.array([[1, 2, 2.37], [3, 2, 2.37], [5, 2, 2.37], [7, 2, 2.37]])
+    fix = locate(line, np.full((3, 4), 2.0), full_output=True)
+    assert np.all(fix.status == -1) and not fix.success
+    ev = evaluate_layout(ROOM, line, nodes=NODES)
+    assert ev.geometry == "collinear" and ev.n_unconverged == ev.errors.size
+    assert ev.to_dict()["stats"]["anchor_geometry"] == "collinear"
+    ceiling = np.array([[1, 1, 2.37], [3, 3, 2.37], [6, 1, 2.37], [7, 3, 2.37]])
+    assert evaluate_layout(ROOM, ceiling, nodes=NODES).geometry == "coplanar"
+    # several layouts at once: only the collinear one is flagged
+    both = locate(np.stack([line, A]), np.full((2, 3, 4), 2.0), full_output=True)
+    assert np.all(both.status[0] == -1) and np.all(both.status[1] != -1)
+
+
+def test_swarm_scores_collinear_layouts_inf():
+    line = np.array([[1, 2, 2.37], [3, 2, 2.37], [5, 2, 2.37], [7, 2, 2.37]])
+    res = pso(peb_of, ROOM, 4, options=FAST, initial=line[None], seed=0)
+    assert np.isinf(res.costs[0][0]) and res.failures == 0
+    assert placement.on_surfaces(ROOM, res.anchors).all() and np.isfinite(res.cost)
+
+
+@pytest.mark.parametrize(
+    ("ranges", "says"),
+    [(-2 * np.ones((2, 4)), ">= -1 m"), (np.full((2, 4), np.nan), "finite"), ("1 2", "numbers")],
+)
+def test_locate_refuses_impossible_ranges(ranges, says):
+    assert says in refused("ranges", lambda: locate(A, ranges))
+
+
+def test_locate_accepts_slightly_negative_noisy_ranges():
+    """The receiver's noisy ranges reach -0.34 m (c times the window): not an error."""
+    fix = locate(A, np.full((1, 4), -0.1), full_output=True)
+    assert fix.x.shape == (1, 3)
+
+
+def test_refine_never_reports_success_with_duplicated_anchors(monkeypatch):
+    refine = __import__("placement.refine", fromlist=["from_uv"])
+    real = refine.from_uv
+
+    def collapse(room, idx, uv):  # make the solver's answer put two anchors together
+        out = real(room, idx, uv)
+        out[1] = out[0]
+        return out
+
+    monkeypatch.setattr(refine, "from_uv", collapse)
+    res = placement.refine_peb(ROOM, placement.random_layout(ROOM, 5, 1), return_info=True)
+    assert not res.success and not res.accepted and res.status.startswith("duplicate_anchors")
+
+
+# -- physics -------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("field", "value", "allowed"),
+    [
+        ("temperature", 1e9, "[-40, 60] °C"),
+        ("temperature", -273.1, "[-40, 60] °C"),
+        ("max_order", 200, "[0, 12]"),
+        ("size", (1e9, 1, 1), "[0.5, 100] m"),
+        ("sound_speed", 4.5, "[250, 450] m/s"),
+        ("air_absorption", 100, "[0, 5] 1/m"),
+    ],
+)
+def test_absurd_physics_refused_with_the_range(field, value, allowed):
+    assert allowed in refused(field, lambda: Room(**{field: value}))
+
+
+@QUICK
+@given(NOT_REALS)
+def test_room_temperature_must_be_a_number(v):
+    refused("temperature", lambda: Room(temperature=v))
+
+
+@QUICK
+@given(st.one_of(st.floats(-1e9, -20.01), st.floats(120.01, 1e9), NOT_REALS))
+def test_snr_range(v):
+    refused("snr_db", lambda: simulate_ranges(ROOM, A, NODES, snr_db=v))
+    refused("snr_db", lambda: analysis.PhysicalRangeNoise(ROOM, snr_db=v))
+
+
+@QUICK
+@given(NOT_REALS)
+def test_range_sigma_must_be_a_number(v):
+    refused("value", lambda: analysis.ConstantRangeNoise(v))
+
+
+@pytest.mark.parametrize("text", ["", "# only a comment\n"])
+def test_empty_toml_is_an_error_naming_the_file(tmp_path, text):
+    p = tmp_path / "room.toml"
+    p.write_text(text)
+    assert "empty" in refused(str(p), lambda: Room.from_toml(p))
+
+
+# -- wrong exception types -------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: Room(absorption=0.5), "absorption"),
+        (lambda: Room(temperature="20"), "temperature"),
+        (lambda: Room(size="8x4x2"), "size"),
+        (lambda: Room(mounting=5), "mounting"),
+        (lambda: Room(name=3), "name"),
+        (lambda: Room.from_dict({"size": 5}), "size"),
+        (lambda: Room.from_dict(5), "room"),
+        (lambda: analysis.ConstantRangeNoise("0.04"), "value"),
+        (lambda: simulate_ranges(ROOM, A, NODES, rng="x"), "rng"),
+        (lambda: simulate_ranges(ROOM, A, NODES, snr_db=1e6), "snr_db"),
+        (lambda: placement.candidate_grid(ROOM, 1e-5), "spacing"),
+        (lambda: placement.candidate_grid(ROOM, "a"), "spacing"),
+        (lambda: Room(max_order=1000), "max_order"),
+        (lambda: image_indices(1000), "max_order"),
+        (lambda: ROOM.grid((10**4, 10**4, 10**4)), "shape"),
+        (lambda: figures.peb_map(ROOM, A, resolution=1e-5), "resolution"),
+        (lambda: placement.relax_select(ROOM, 4, spacing=0.01), "candidates"),
+        (lambda: evaluate_layout("techtile", A), "room"),
+        (lambda: Chirp(f0="25e3"), "f0"),
+        (lambda: Chirp(duration=100.0), "duration"),
+        (lambda: analysis.peb(A, NODES, sigma="a"), "sigma"),
+        (lambda: analysis.calibrated_sigma(np.ones((2, 3, 4)), k="3"), "k"),
+    ],
+)
+def test_value_error_not_type_memory_or_attribute_error(call, name):
+    refused(name, call)
+
+
+def test_rng_accepts_a_seed():
+    a = simulate_ranges(ROOM, A, NODES, rng=5)
+    b = simulate_ranges(ROOM, A, NODES, rng=np.random.default_rng(5))
+    np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("size = 5\n", "size"),
+        ("absorption = 0.5\n", "absorption"),
+        ('temperature = "hot"\n', "temperature"),
+        ("max_order = true\n", "max_order"),
+        ("size = [8, 4\n", "not valid TOML"),
+        ("sise = [1, 2, 3]\n", "sise"),
+        ('mounting = "attic"\n', "attic"),
+    ],
+)
+def test_toml_errors_name_the_file_and_key(tmp_path, text, says):
+    p = tmp_path / "room.toml"
+    p.write_text(text)
+    msg = refused(str(p), lambda: Room.from_toml(p))
+    assert says in msg
+
+
+def test_toml_mounting_string_is_one_surface(tmp_path):
+    p = tmp_path / "room.toml"
+    p.write_text('mounting = "ceiling"\n')
+    assert Room.from_toml(p).mounting == ("ceiling",) == Room(mounting="ceiling").mounting
+
+
+# -- no hang: sizes are estimated first -------------------------------------------------------
+def test_huge_realizations_refused_before_spawning_streams():
+    msg = refused("realizations", lambda: evaluate_layout(ROOM, A, realizations=10**9), within=1)
+    assert "memory" in msg
+
+
+def test_huge_random_layout_refused():
+    refused("M", lambda: placement.random_layout(ROOM, 10**9, 0), within=1)
+
+
+# -- the CLI: one line, exit code 2, before any work -----------------------------------------
+def run_cli(argv, capsys, within=5.0):
+    t0 = time.monotonic()
+    code = main(argv)
+    seconds = time.monotonic() - t0
+    captured = capsys.readouterr()
+    assert code == 2, captured
+    assert seconds < within
+    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    return captured.err
+
+
+@pytest.fixture
+def files(tmp_path):
+    (tmp_path / "adir").mkdir()
+    (tmp_path / "afile.txt").write_text("x")
+    (tmp_path / "ok.json").write_text(json.dumps({"anchors": A.tolist()}))
+    (tmp_path / "dup.json").write_text(json.dumps({"anchors": np.vstack([A, A[:1]]).tolist()}))
+    (tmp_path / "empty.toml").write_text("")
+    return tmp_path
+
+
+@pytest.mark.parametrize(
+    ("argv", "names"),
+    [
+        (["plan", "--room", "{t}/adir", "--out", "{t}/o"], "--room"),
+        (["bounds", "--room", "{t}/missing.toml"], "--room"),
+        (["bounds", "--room", "{t}/empty.toml"], "empty.toml"),
+        (["evaluate", "--layout", "{t}/adir", "--out", "{t}/o"], "--layout"),
+        (["evaluate", "--layout", "{t}/dup.json", "--out", "{t}/o"], "1 mm apart"),
+        (["plan", "--checkpoint", "{t}/adir", "--out", "{t}/o"], "--checkpoint"),
+        (["bounds", "--out", "{t}/adir"], "--out"),
+        (["plan", "--out", "{t}/afile.txt"], "--out"),
+        (["evaluate", "--layout", "{t}/ok.json", "--out", "{t}/afile.txt"], "--out"),
+        (["peb-map", "--out", "{t}/m.gif"], "--out"),
+        (["report", "{t}/afile.txt"], "RESULT_DIR"),
+        (["plan", "--anchors", "300", "--out", "{t}/o"], "--anchors"),
+        (["plan", "--anchors", "3.5", "--out", "{t}/o"], "--anchors"),
+        (["plan", "--particles", "1", "--out", "{t}/o"], "--particles"),
+        (["plan", "--eval-timeout", "0", "--out", "{t}/o"], "--eval-timeout"),
+        (["plan", "--workers", "-1", "--out", "{t}/o"], "--workers"),
+        (["plan", "--validate-realizations", "1000000000", "--out", "{t}/o"], "memory"),
+        (["evaluate", "--layout", "{t}/ok.json", "--realizations", "0", "--out", "{t}/o"], "--r"),
+        (["evaluate", "--layout", "{t}/ok.json", "--snr", "1e6", "--out", "{t}/o"], "--snr"),
+        (["bounds", "--sigma", "nan"], "--sigma"),
+        (["peb-map", "--resolution", "1e-4", "--out", "{t}/m.png"], "--resolution"),
+        (["peb-map", "--dpi", "100000", "--out", "{t}/m.png"], "--dpi"),
+        (["peb-map", "--size", "1000", "1000", "--out", "{t}/m.png"], "--size"),
+        (["peb-map", "--height", "9", "--out", "{t}/m.png"], "--height"),
+        (["report", "{t}/adir", "--dpi", "0"], "--dpi"),
+        (["frobnicate"], "frobnicate"),
+    ],
+)
+def test_cli_bad_input_one_line_exit_2(files, capsys, argv, names):
+    err = run_cli([a.replace("{t}", str(files)) for a in argv], capsys)
+    assert names in err, err
+
+
+def test_cli_checks_outputs_before_computing(files, capsys):
+    """plan/evaluate --out FILE used to fail after the whole computation."""
+    argv = ["plan", "--anchors", "4", "--no-progress", "--out", str(files / "afile.txt")]
+    assert "exists and is not a directory" in run_cli(argv, capsys, within=3)
+
+
+def test_cli_unexpected_failure_is_one_line_exit_1(monkeypatch, capsys):
+    import placement.cli.bounds as bounds
+
+    def boom(*a, **k):
+        raise RuntimeError("something broke\nbadly")
+
+    monkeypatch.setattr(bounds, "error_stats", boom)
+    assert main(["bounds"]) == 1
+    err = capsys.readouterr().err
+    assert err == "anchorplan bounds: error: RuntimeError: something broke badly\n"
