@@ -38,7 +38,7 @@ from matplotlib.lines import Line2D
 from analysis.fim import peb as _peb
 from simulation import checks
 from simulation.directivity import aim_vectors
-from simulation.room import SURFACES, Room
+from simulation.room import SURFACES, Room, as_room
 
 #: colour-blind-friendly qualitative palette (Okabe–Ito without black, plus extras)
 PALETTE: tuple[str, ...] = (
@@ -113,8 +113,7 @@ def new_figure(figsize=(7.0, 4.5), dpi: float = 100, layout: str | None = "const
     w, h = (float(v) for v in figsize)
     if not (w > 0 and h > 0 and math.isfinite(w) and math.isfinite(h)):
         raise ValueError(f"figsize: expected two positive inch sizes, got {figsize}")
-    if not (dpi > 0 and math.isfinite(dpi)):
-        raise ValueError(f"dpi: must be > 0, got {dpi}")
+    dpi = checks.real("dpi", dpi, low=0.0, high=10_000.0, low_open=True)
     fig = Figure(figsize=(w, h), dpi=dpi, layout=layout)
     FigureCanvasAgg(fig)
     return fig
@@ -196,7 +195,7 @@ def _colorbar(fig, mappable, ax, label: str, extend: str = "neither", **kw):
 
 
 def _as_points(a, name: str, n: int | None = None) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
+    a = checks.reals(name, a, finite=False)
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"{name}: expected shape (N, 3), got {a.shape}")
     if n is not None and a.shape[0] != n:
@@ -224,10 +223,10 @@ def peb_plane(
     other axes in increasing order and PEB values (nu, nv) in metres, +inf where the FIM
     is singular; ``resolution`` is the cell size in metres and ``sigma`` the range σ (m).
     """
-    k = _AXES.index(axis) if isinstance(axis, str) else int(axis)
-    if k not in (0, 1, 2):
+    if not isinstance(axis, int | str) or isinstance(axis, bool) or axis not in (0, 1, 2, *_AXES):
         raise ValueError(f"axis: must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
-    L = room.size
+    k = _AXES.index(axis) if isinstance(axis, str) else int(axis)
+    L = as_room(room).size
     value = checks.real("value", value, low=0.0, high=L[k], unit="m")
     resolution = checks.real("resolution", resolution, low=0.0, low_open=True, unit="m")
     iu, iv = (i for i in range(3) if i != k)
@@ -273,6 +272,7 @@ def peb_map(
     "PEB (m)". Anchors are projected onto each panel as numbered squares (numbers = row
     in ``anchors``, from 1); grey cells are singular (PEB = ∞).
     """
+    room = as_room(room)
     anchors = _as_points(anchors, "anchors")
     if heights is None:
         heights = () if (x_cuts or y_cuts) else (room.size[2] / 2,)

@@ -22,7 +22,7 @@ from simulation.chirp import Chirp
 from simulation.directivity import aim_vectors, cardioid
 from simulation.noise import check_snr
 from simulation.receiver import Receiver
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 #: accepted constant range σ (m)
 SIGMA_RANGE = (0.0, 10.0)
@@ -50,8 +50,11 @@ def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
     A = g(θ)·exp(−a·d/2)/(4π d): cardioid gain toward p (anchor aimed at the centroid),
     air absorption and spherical spreading (SPEC §2). A node on an anchor gets +inf.
     """
-    a = np.asarray(anchors, dtype=float)
-    p = np.asarray(positions, dtype=float)
+    room = as_room(room)
+    a = checks.reals("anchors", anchors)
+    p = checks.points("positions", positions)
+    if a.ndim < 2 or a.shape[-1] != 3:
+        raise ValueError(f"anchors: expected shape (..., M, 3), got {a.shape}")
     diff = p[:, None, :] - a[..., None, :, :]  # (..., P, M, 3)
     d = np.linalg.norm(diff, axis=-1)
     aim = aim_vectors(a, room.centroid)[..., None, :, :]  # (..., 1, M, 3)

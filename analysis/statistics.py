@@ -6,6 +6,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from simulation import checks
+
 
 @dataclass(frozen=True)
 class ErrorStats:
@@ -30,7 +32,7 @@ class ErrorStats:
 
 def error_stats(errors) -> ErrorStats:
     """:class:`ErrorStats` of an array of Euclidean errors (any shape, metres)."""
-    e = np.asarray(errors, dtype=float).ravel()
+    e = _numbers("errors", errors).ravel()
     ok = np.isfinite(e)
     v = e[ok]
     if v.size == 0:
@@ -48,19 +50,34 @@ def error_stats(errors) -> ErrorStats:
     )
 
 
+def _numbers(name: str, value) -> np.ndarray:
+    """A float array (NaN and inf allowed: they mark failed fixes)."""
+    return checks.reals(name, value, finite=False)
+
+
+def _difference(estimates, truth) -> np.ndarray:
+    e, t = _numbers("estimates", estimates), _numbers("truth", truth)
+    try:
+        return e - t
+    except ValueError:
+        raise ValueError(
+            f"estimates/truth: shapes {e.shape} and {t.shape} do not broadcast"
+        ) from None
+
+
 def euclidean_errors(estimates, truth) -> np.ndarray:
     """‖p̂ − p‖ over the last axis: estimates (..., P, 3), truth (P, 3) → (..., P) metres."""
-    return np.linalg.norm(np.asarray(estimates, float) - np.asarray(truth, float), axis=-1)
+    return np.linalg.norm(_difference(estimates, truth), axis=-1)
 
 
 def axis_errors(estimates, truth) -> np.ndarray:
     """Absolute per-axis errors |p̂ − p|, (..., P, 3) metres (paper Fig. 3)."""
-    return np.abs(np.asarray(estimates, float) - np.asarray(truth, float))
+    return np.abs(_difference(estimates, truth))
 
 
 def ecdf(values) -> tuple[np.ndarray, np.ndarray]:
     """Empirical CDF of the finite values: (sorted x, F) with F = i/n, i = 1…n."""
-    v = np.sort(np.asarray(values, dtype=float).ravel())
+    v = np.sort(_numbers("values", values).ravel())
     v = v[np.isfinite(v)]
     return v, np.arange(1, v.size + 1) / max(v.size, 1)
 
@@ -72,8 +89,13 @@ def dop(position_errors, range_errors) -> np.ndarray:
     range_errors (R, P, M): signed range errors; σ_r is the mean over anchors of their
     standard deviation over realizations. Nodes with σ_r = 0 give +inf.
     """
-    e = np.asarray(position_errors, dtype=float)
-    r = np.asarray(range_errors, dtype=float)
+    e = _numbers("position_errors", position_errors)
+    r = _numbers("range_errors", range_errors)
+    if e.ndim != 2 or r.ndim != 3 or r.shape[:2] != e.shape:
+        raise ValueError(
+            "position_errors/range_errors: expected shapes (R, P) and (R, P, M), "
+            f"got {e.shape} and {r.shape}"
+        )
     sigma_pos = np.sqrt(np.mean(e * e, axis=0))
     sigma_r = np.mean(np.std(r, axis=0), axis=-1)
     out = np.full(sigma_pos.shape, np.inf)

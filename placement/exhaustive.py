@@ -35,7 +35,7 @@ import numpy as np
 from analysis.fim import SINGULAR_RTOL
 from placement.surfaces import candidate_grid, on_surfaces
 from simulation import checks
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 CRITERIA = ("A", "D", "minimax")
 
@@ -86,8 +86,7 @@ def design_inputs(
     spacing: float = DEFAULT_SPACING,
 ) -> DesignInputs:
     """Check the arguments of a selection problem; raise ``ValueError`` naming the problem."""
-    if not isinstance(room, Room):
-        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    room = as_room(room)
     checks.choice("criterion", criterion, CRITERIA)
     if candidates is None:
         cand = candidate_grid(room, spacing)

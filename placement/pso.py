@@ -39,7 +39,7 @@ import numpy as np
 from placement.surfaces import project, random_layout
 from placement.workers import WorkerPool
 from simulation import checks
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 logger = logging.getLogger(__name__)
 
@@ -95,6 +95,9 @@ class PSOOptions:
         threshold"); ``tol = 0`` runs all iterations. The single-realization cost is
         noisy and the best cost is a lucky draw, so improvements come in rare steps: with a
         patience of 8, seeded swarms stopped after 14 of 40 iterations (measured), hence 20.
+
+    Allowed: particles 2–10⁴, iterations 1–10⁵, inertia [0, 1], cognitive and social
+    [0, 4], velocity_clamp (0, 1], init_velocity and tol [0, 1], patience ≥ 1.
     """
 
     particles: int = 15
@@ -110,9 +113,10 @@ class PSOOptions:
     def __post_init__(self) -> None:
         checks.count("particles", self.particles, low=2, high=MAX_PARTICLES)
         checks.count("iterations", self.iterations, low=1, high=MAX_ITERATIONS)
-        for name in ("inertia", "cognitive", "social", "init_velocity", "tol"):
-            checks.real(name, getattr(self, name), low=0.0)
-        checks.real("velocity_clamp", self.velocity_clamp, low=0.0, low_open=True)
+        for name, high in (("inertia", 1.0), ("cognitive", 4.0), ("social", 4.0),
+                           ("init_velocity", 1.0), ("tol", 1.0)):  # fmt: skip
+            checks.real(name, getattr(self, name), low=0.0, high=high)
+        checks.real("velocity_clamp", self.velocity_clamp, low=0.0, high=1.0, low_open=True)
         checks.count("patience", self.patience, low=1)
 
 
@@ -471,8 +475,7 @@ def pso(
     inf (``failures``, ``extra["lost"]``); a plain ``ProcessPoolExecutor`` cannot survive
     that and :class:`ExecutorBroken` is raised, the checkpoint holding the last iteration.
     """
-    if not isinstance(room, Room):
-        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    room = as_room(room)
     if options is not None and not isinstance(options, PSOOptions):
         raise ValueError(
             f"options: must be a PSOOptions (e.g. PSOOptions(**options)) or None, "

@@ -41,7 +41,7 @@ import numpy as np
 from analysis.fim import peb
 from placement.surfaces import from_uv, mounting_surfaces, on_surfaces, to_uv
 from simulation import checks
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 log = logging.getLogger(__name__)
 
@@ -219,6 +219,7 @@ def refine_peb(
     :class:`RefineResult` when ``return_info``. Bad input raises ``ValueError``.
     """
     t0 = time.perf_counter()
+    room = as_room(room)
     a0 = room.check_anchors(checks.reals("anchors", anchors), min_anchors=4)
     checks.distinct("anchors", a0)
     M = a0.shape[0]

@@ -15,7 +15,7 @@ import numpy as np
 
 from simulation import checks
 from simulation.directivity import aim_vectors
-from simulation.room import SURFACES, Room
+from simulation.room import SURFACES, Room, as_room
 
 #: most candidate points :func:`candidate_grid` makes, and most anchors of a random layout
 MAX_CANDIDATES, MAX_LAYOUT_ANCHORS = 1_000_000, 100_000
@@ -49,6 +49,7 @@ class MountingSurface:
 
 def mounting_surfaces(room: Room) -> tuple[MountingSurface, ...]:
     """The room's allowed mounting rectangles, in the order of ``room.mounting``."""
+    room = as_room(room)
     o = room.anchor_offset
     out = []
     for name in room.mounting:
@@ -97,7 +98,9 @@ def project(room: Room, points) -> np.ndarray:
 
 def surface_index(room: Room, points, tol: float = 1e-9) -> np.ndarray:
     """(...,) index into :func:`mounting_surfaces` of the surface each point lies on, −1 if none."""
-    p = np.asarray(points, dtype=float)
+    p = checks.reals("points", points)
+    if p.ndim < 1 or p.shape[-1] != 3:
+        raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
     lo, hi = _bounds(room)
     on = np.all((p[..., None, :] >= lo - tol) & (p[..., None, :] <= hi + tol), axis=-1)
     return np.where(on.any(axis=-1), np.argmax(on, axis=-1), -1)
@@ -110,7 +113,7 @@ def on_surfaces(room: Room, points, tol: float = 1e-9) -> np.ndarray:
 
 def to_uv(room: Room, points, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """(surface index (...,), uv (..., 2)) of points on the surfaces; ValueError if off them."""
-    p = np.asarray(points, dtype=float)
+    p = checks.reals("points", points)
     idx = surface_index(room, p, tol)
     if np.any(idx < 0):
         raise ValueError("points: some points are not on an allowed mounting surface")
@@ -182,4 +185,4 @@ def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = No
 
 def aim(room: Room, anchors) -> np.ndarray:
     """(..., M, 3) unit aim vectors of the anchors toward the room centroid (SPEC §2)."""
-    return aim_vectors(anchors, room.centroid)
+    return aim_vectors(anchors, as_room(room).centroid)

@@ -245,9 +245,11 @@ def reals(
     high_open: bool = False,
     unit: str = "",
     allow_inf: bool = False,
+    finite: bool = True,
 ) -> np.ndarray:
     """A float array of real numbers with the given ``shape`` (None entries: any length),
-    every entry finite (or +inf when ``allow_inf``) and within the bounds."""
+    every entry finite (or +inf when ``allow_inf``; anything when not ``finite``) and
+    within the bounds."""
     if isinstance(value, str | bytes | Mapping) or value is None or _has_bool(value):
         raise ValueError(f"{name}: must be an array of numbers, got {describe(value)}")
     try:
@@ -267,8 +269,8 @@ def reals(
             want = tuple("n" if s is None else s for s in shape)
             want = str(want).replace("'", "")
             raise ValueError(f"{name}: expected shape {want}, got {describe(value)}")
-    finite = np.isfinite(a) | (allow_inf & (a == np.inf))
-    if not np.all(finite):
+    ok = np.isfinite(a) | (allow_inf & (a == np.inf))
+    if finite and not np.all(ok):
         raise ValueError(f"{name}: every entry must be a finite number (no NaN or inf)")
     allowed = _interval(low, high, low_open, high_open, unit)
     bad = np.zeros(a.shape, dtype=bool)
@@ -280,7 +282,7 @@ def reals(
         first = a[bad].ravel()[0]
         raise ValueError(
             f"{name}: every entry must be {allowed}, got {_num(first)}"
-            + (f" in {describe(value)}" if a.size <= 6 else "")
+            + (f" in {describe(value)}" if 1 < a.size <= 6 else "")
         )
     return a
 

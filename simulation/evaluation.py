@@ -27,7 +27,7 @@ from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
 from simulation.receiver import Receiver, dsp_for
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
 NOISE_BUDGET_BYTES = 64 * 2**20
@@ -55,9 +55,7 @@ class RangingScene:
         receiver: Receiver | None = None,
         precision: str = "float64",
     ):
-        if not isinstance(room, Room):
-            raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
-        self.room = room
+        self.room = room = as_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
         self.nodes = room.grid() if nodes is None else _check_nodes(nodes, room)
         self.chirp = Chirp() if chirp is None else chirp
@@ -133,6 +131,7 @@ def simulate_ranges(
     1 mm apart; nodes must be inside the room.
     """
     rng = checks.rng("rng", rng)
+    room = as_room(room)
     checks.distinct("anchors", room.check_anchors(checks.reals("anchors", anchors), 1))
     scene = RangingScene(
         room,
@@ -312,8 +311,7 @@ def evaluate_layout(
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
     ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
     """
-    if not isinstance(room, Room):
-        raise ValueError(f"room: must be a simulation.Room, got {checks.describe(room)}")
+    room = as_room(room)
     anchors = room.check_anchors(checks.reals("anchors", anchors))
     checks.distinct("anchors", anchors)
     realizations = checks.count("realizations", realizations, low=1)
@@ -323,7 +321,11 @@ def evaluate_layout(
     max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
-    if workers is not None and (isinstance(workers, bool) or workers not in range(-1, 1025)):
+    if workers is not None and (
+        isinstance(workers, bool)
+        or not isinstance(workers, int | np.integer)
+        or workers not in range(-1, 1025)
+    ):
         raise ValueError(
             "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
             f"got {checks.describe(workers)}"

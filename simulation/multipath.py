@@ -28,7 +28,7 @@ import numpy as np
 
 from simulation import checks
 from simulation.directivity import aim_vectors, cardioid
-from simulation.room import MAX_ORDER, Room
+from simulation.room import MAX_ORDER, Room, as_room
 
 
 def image_indices(max_order: int) -> np.ndarray:
@@ -74,7 +74,7 @@ class ImageSet:
     @classmethod
     def for_room(cls, room: Room) -> ImageSet:
         """Images up to ``room.max_order`` with a nonzero wall product."""
-        n = image_indices(room.max_order)
+        n = image_indices(as_room(room).max_order)
         beta = room.reflections  # (3, 2) by [axis, side]
         low, high = wall_hits(n)
         with np.errstate(divide="ignore"):
@@ -121,8 +121,9 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
     ``aim_at`` (3,) is where the cardioids point (default the room centroid, SPEC §2).
     A node exactly on an image (d = 0) is not physical; such paths get A = 0.
     """
-    a = np.asarray(anchors, dtype=float)
-    p = np.asarray(nodes, dtype=float)
+    room = as_room(room)
+    a = checks.reals("anchors", anchors)
+    p = checks.reals("nodes", nodes)
     if a.ndim != 2 or a.shape[1] != 3:
         raise ValueError(f"anchors: expected shape (M, 3), got {a.shape}")
     if p.ndim != 2 or p.shape[1] != 3:

@@ -21,7 +21,7 @@ from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
 from simulation.received import received_windows
 from simulation.receiver import Receiver
-from simulation.room import Room
+from simulation.room import Room, as_room
 
 #: default SNR at the grid node closest to each anchor, dB (SPEC §2)
 DEFAULT_SNR_DB = 30.0
@@ -37,7 +37,8 @@ def check_snr(name: str, snr_db) -> float:
 
 def reference_nodes(room: Room, anchors, grid_shape=(9, 6, 5)) -> np.ndarray:
     """(M, 3) the grid node closest to each anchor (ties: the first in grid order)."""
-    a = np.asarray(anchors, dtype=float)
+    room = as_room(room)
+    a = checks.points("anchors", anchors)
     grid = room.grid(grid_shape)
     d = np.linalg.norm(grid[:, None, :] - a[None, :, :], axis=-1)  # (G, M)
     return grid[np.argmin(d, axis=0)]
@@ -58,7 +59,8 @@ def noise_sigma(
     its :func:`reference_nodes` node.
     """
     snr_db = check_snr("snr_db", snr_db)
-    a = np.asarray(anchors, dtype=float)
+    room = as_room(room)
+    a = checks.points("anchors", anchors)
     ref = reference_nodes(room, a, grid_shape)
     paths = compute_paths(room, a, ref, images=images)  # (M nodes, M anchors, I)
     w = received_windows(paths, room.speed_of_sound, chirp, receiver)

@@ -73,7 +73,12 @@ class PositionFix:
 def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
     if region is None:
         return anchors.min(axis=0), anchors.max(axis=0)
-    lo, hi = (np.asarray(v, dtype=float).reshape(3) for v in region)
+    try:
+        lo, hi = (checks.reals("region", v, shape=(3,)) for v in region)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"region: expected (lo (3,), hi (3,)) in metres, got {checks.describe(region)}"
+        ) from None
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi >= lo)):
         raise ValueError(f"region: expected finite (lo (3,), hi (3,)) with hi >= lo, got {region}")
     return lo, hi
@@ -195,6 +200,7 @@ def locate(
     for name, tol in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):
         checks.real(name, tol, low=0.0)
     checks.flag("bounded", bounded)
+    checks.flag("full_output", full_output)
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
     B = R.shape[0]
@@ -211,7 +217,11 @@ def locate(
         anc = a
 
     if x0 is not None:
-        x = np.broadcast_to(np.asarray(x0, dtype=float), (*lead, 3)).reshape(B, 3).copy()
+        x0 = checks.reals("x0", x0)
+        try:
+            x = np.broadcast_to(x0, (*lead, 3)).reshape(B, 3).copy()
+        except ValueError:
+            raise ValueError(f"x0: expected shape (3,) or (..., P, 3), got {x0.shape}") from None
         if not np.all(np.isfinite(x)):
             raise ValueError("x0: must be finite")
     else:

@@ -207,6 +207,7 @@ class Room:
 
     def to_toml(self, path: str | Path) -> None:
         """Write the room as TOML (readable by :meth:`from_toml`)."""
+        path = checks.output_path("path", path, suffixes=(".toml",))
         lines = []
         d = self.to_dict()
         absorption = d.pop("absorption")
@@ -272,7 +273,10 @@ class Room:
 
     def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
         """(P,) bool: points (P, 3) lie inside the room, at least ``margin`` from each plane."""
-        p = np.asarray(points, dtype=float)
+        p = checks.reals("points", points, finite=False)
+        if p.ndim < 1 or p.shape[-1] != 3:
+            raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
+        margin = checks.real("margin", margin, low=0.0, unit="m")
         return np.all((p >= margin) & (p <= np.array(self.size) - margin), axis=-1)
 
     def check_anchors(self, anchors, min_anchors: int = 4) -> np.ndarray:
@@ -280,7 +284,8 @@ class Room:
 
         Returns the layout as a float array; raises ``ValueError`` naming the problem.
         """
-        a = np.asarray(anchors, dtype=float)
+        min_anchors = checks.count("min_anchors", min_anchors, low=1, high=1_000_000)
+        a = checks.reals("anchors", anchors)
         if a.ndim != 2 or a.shape[1] != 3:
             raise ValueError(f"anchors: expected shape (M, 3), got {a.shape}")
         if a.shape[0] < min_anchors:
@@ -308,6 +313,16 @@ class Room:
         return np.array(
             [[o, o, o], [Lx - o, Ly - o, o], [Lx - o, o, Lz - o], [o, Ly - o, Lz - o]], dtype=float
         )
+
+
+def as_room(value: Any, name: str = "room") -> Room:
+    """``value`` if it is a :class:`Room`; ValueError naming ``name`` otherwise."""
+    if not isinstance(value, Room):
+        raise ValueError(
+            f"{name}: must be a simulation.Room (e.g. Room.techtile(), Room.from_toml(path)), "
+            f"got {checks.describe(value)}"
+        )
+    return value
 
 
 def _toml_value(v: Any) -> str:

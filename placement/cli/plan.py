@@ -130,7 +130,7 @@ def _check_args(args, room) -> None:
     checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
     checks.count("--realizations", args.realizations, low=1, high=MAX_REALIZATIONS)
     checks.count("--validate-realizations", args.validate_realizations, low=0)
-    checks.count("--finalists", args.finalists, low=1, high=args.particles)
+    checks.count("--finalists", args.finalists, low=1, high=MAX_PARTICLES)
     checks.count(
         "--finalist-realizations", args.finalist_realizations, low=1, high=MAX_REALIZATIONS
     )
@@ -142,6 +142,8 @@ def _check_args(args, room) -> None:
         checks.real("--eval-timeout", args.eval_timeout, low=0.0, low_open=True, unit="s")
     if args.search_starts is not None:
         checks.count("--search-starts", args.search_starts, low=0, high=10_000)
+    if args.search_spacing is not None:
+        checks.real("--search-spacing", args.search_spacing, low=0.0, low_open=True, unit="m")
     if args.search_realizations is not None:
         checks.count("--search-realizations", args.search_realizations, low=1, high=100)
     M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
@@ -154,7 +156,6 @@ def _check_args(args, room) -> None:
             )
         if args.cost != "peb" and args.search_starts != 0:
             spacing = 0.6 if args.search_spacing is None else args.search_spacing
-            checks.real("--search-spacing", spacing, low=0.0, low_open=True, unit="m")
             try:
                 n = len(candidate_grid(room, spacing))
             except ValueError as exc:
@@ -169,8 +170,6 @@ def _check_args(args, room) -> None:
                     f"--anchors: {M} anchors exceed the {n} candidate points of the seed "
                     f"search (--search-spacing {spacing:g} m)"
                 )
-    elif args.search_spacing is not None:
-        checks.real("--search-spacing", args.search_spacing, low=0.0, low_open=True, unit="m")
     checks.check_size(
         "--validate-realizations",
         args.validate_realizations * len(room.grid()) * M * BYTES_PER_RANGE,
