@@ -689,6 +689,78 @@ def build_api_cases(tmp: Path) -> None:
     )
 
 
+def build_neighbour_cases() -> None:
+    """Wrong types for each argument of the public functions (the neighbours of the
+    issue's examples): a string, an arbitrary object, a dict and NaN."""
+    from simulation import Chirp, Receiver, reference_nodes
+    from simulation.multipath import compute_paths
+
+    S = ROOM.grid()[:3]
+    table = {
+        "Room.grid": (ROOM.grid, {"shape": (9, 6, 5)}),
+        "Room.check_anchors": (ROOM.check_anchors, {"anchors": A, "min_anchors": 4}),
+        "Room.contains": (ROOM.contains, {"points": A, "margin": 0.0}),
+        "Chirp": (Chirp, {"f0": 25e3, "f1": 45e3, "duration": 0.03}),
+        "Receiver": (Receiver, {"fs": 192e3, "t_wake": 0.029, "window": 192}),
+        "simulate_ranges": (
+            simulate_ranges,
+            {"room": ROOM, "anchors": A, "nodes": S, "noise": True, "rng": 0, "snr_db": 30.0},
+        ),
+        "evaluate_layout": (
+            evaluate_layout,
+            {"room": ROOM, "anchors": A, "realizations": 1, "seed": 0, "nodes": S, "chunk": 1},
+        ),
+        "locate": (locate, {"anchors": A, "ranges": np.ones((2, 4)), "max_iter": 100}),
+        "noise_sigma": (noise_sigma, {"room": ROOM, "anchors": A, "snr_db": 30.0}),
+        "reference_nodes": (reference_nodes, {"room": ROOM, "anchors": A}),
+        "compute_paths": (compute_paths, {"room": ROOM, "anchors": A, "nodes": S}),
+        "peb": (analysis.peb, {"anchors": A, "positions": S, "sigma": 0.04}),
+        "crlb": (analysis.crlb, {"anchors": A, "positions": S, "sigma": 0.04}),
+        "PhysicalRangeNoise": (analysis.PhysicalRangeNoise, {"room": ROOM, "snr_db": 30.0}),
+        "MultipathRangeNoise": (analysis.MultipathRangeNoise, {"room": ROOM, "floor": 0.04}),
+        "direct_amplitude": (
+            analysis.direct_amplitude,
+            {"room": ROOM, "anchors": A, "positions": S},
+        ),
+        "calibrated_sigma": (analysis.calibrated_sigma, {"range_errors": np.ones((2, 3, 4))}),
+        "dop": (
+            analysis.dop,
+            {"position_errors": np.ones((2, 3)), "range_errors": np.ones((2, 3, 4))},
+        ),
+        "candidate_grid": (placement.candidate_grid, {"room": ROOM, "spacing": 0.5}),
+        "random_layout": (placement.random_layout, {"room": ROOM, "M": 4, "rng": 0}),
+        "project": (placement.project, {"room": ROOM, "points": A}),
+        "on_surfaces": (placement.on_surfaces, {"room": ROOM, "points": A}),
+        "aim": (placement.aim, {"room": ROOM, "anchors": A}),
+        "relax_select": (
+            placement.relax_select,
+            {"room": ROOM, "M": 4, "criterion": "A", "sigma": 0.04, "spacing": 1.6},
+        ),
+        "exhaustive_search": (
+            placement.exhaustive_search,
+            {"room": ROOM, "M": 4, "criterion": "A", "spacing": 3.0},
+        ),
+        "refine_peb": (
+            placement.refine_peb,
+            {"room": ROOM, "anchors": A, "objective": "mean", "max_iter": 20},
+        ),
+        "PSOOptions": (PSOOptions, {"particles": 3, "iterations": 1, "tol": 0.0}),
+        "pso": (pso, {"cost": peb_cost, "room": ROOM, "M": 4, "options": FAST, "seed": 0}),
+        "peb_plane": (
+            figures.peb_plane,
+            {"room": ROOM, "anchors": A, "axis": "z", "value": 1.0, "resolution": 0.2},
+        ),
+    }
+    bad = {"'x'": "x", "object()": object(), "{}": {}, "nan": math.nan}
+    for fname, (fn, base) in table.items():
+        for arg in base:
+            for label, v in bad.items():
+                if arg == "axis" and label in ("nan", "'x'"):  # 'x' is an axis
+                    continue
+                kw = {**base, arg: v}
+                api("neighbours", f"{fname}({arg}={label})", arg, lambda fn=fn, kw=kw: fn(**kw))
+
+
 PHYSICS_KEYS = {"temperature", "max_order", "size", "sound_speed", "air_absorption"}
 TOML_CASES = [
     ("empty.toml", "", "empty"),
@@ -964,6 +1036,7 @@ def main() -> None:
     try:
         make_files(tmp)
         build_api_cases(tmp)
+        build_neighbour_cases()
         build_cli_cases(tmp)
         counts: dict[str, Counter] = {"all": Counter(), "core": Counter(), "plan": Counter()}
         by_category: dict[str, Counter] = {}
@@ -997,7 +1070,7 @@ def main() -> None:
             summary[key] = {
                 "cases": n,
                 **dict(c),
-                "ok_share": round(sum(c[g] for g in good) / n, 4) if n else math.nan,
+                "ok_share": round(sum(c[g] for g in good) / n, 4) if n else None,
             }
         summary["by_category"] = {k: dict(v) for k, v in sorted(by_category.items())}
         print(json.dumps(summary), flush=True)
