@@ -434,3 +434,40 @@ def test_cli_unexpected_failure_is_one_line_exit_1(monkeypatch, capsys):
     assert main(["bounds"]) == 1
     err = capsys.readouterr().err
     assert err == "anchorplan bounds: error: RuntimeError: something broke badly\n"
+
+
+@pytest.mark.parametrize("room", [None, "techtile", {"size": [8, 4, 2.4]}])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda r: simulate_ranges(r, A, NODES),
+        lambda r: evaluate_layout(r, A),
+        lambda r: placement.candidate_grid(r, 0.5),
+        lambda r: placement.random_layout(r, 4, 0),
+        lambda r: placement.project(r, A),
+        lambda r: placement.relax_select(r, 4),
+        lambda r: placement.refine_peb(r, A),
+        lambda r: pso(peb_of, r, 4, options=FAST),
+        lambda r: analysis.PhysicalRangeNoise(r),
+        lambda r: figures.peb_map(r, A),
+    ],
+)
+def test_room_must_be_a_room(call, room):
+    assert "simulation.Room" in refused("room", lambda: call(room))
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: locate(A, np.ones((2, 4)), region="x"), "region"),
+        (lambda: locate(A, np.ones((2, 4)), x0="x"), "x0"),
+        (lambda: analysis.error_stats("abc"), "errors"),
+        (lambda: analysis.dop(np.ones((2, 3)), np.ones((2, 4, 4))), "range_errors"),
+        (lambda: placement.on_surfaces(ROOM, "abc"), "points"),
+        (lambda: ROOM.check_anchors(A, min_anchors=True), "min_anchors"),
+        (lambda: figures.peb_plane(ROOM, A, axis=2.5, value=1.0), "axis"),
+        (lambda: PSOOptions(inertia=5.0), "inertia"),
+    ],
+)
+def test_neighbours_of_the_issue_examples(call, name):
+    refused(name, call)
