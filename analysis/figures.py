@@ -9,7 +9,7 @@ bounding box), so callers get the size they ask for.
 This module imports matplotlib; ``import analysis`` does not import it (use
 ``from analysis import figures``).
 
-Conventions: lengths in metres; PEB = √tr J⁻¹ in metres (SPEC §3); colour bars are
+Conventions: lengths in metres; PEB = √tr J⁻¹ in metres (docs/model.md); colour bars are
 labelled with their unit; non-finite values (a singular FIM gives PEB = +inf) are drawn
 in grey and never stretch a colour scale. Several layouts in one figure take a mapping
 name → array, drawn in the colours of :func:`layout_colors` so a layout keeps its colour

@@ -1,10 +1,10 @@
-"""Exhaustive search over all M-subsets of N candidate mounting points (SPEC §4).
+"""Exhaustive search over all M-subsets of N candidate mounting points (paper §III-A).
 
 The exact answer to the selection problem that :func:`placement.relax_select` bounds and
 rounds: every M-subset of the candidates is scored with the same criterion, so for small
 N and M the optimum is proved by enumeration (the tests use it to check the relaxation).
 
-Criteria (σ the range standard deviation, J_p the FIM of SPEC §3 at node p):
+Criteria (σ the range standard deviation, J_p the FIM of paper eq. 6 at node p):
 
 * ``"A"``: mean over the nodes of tr J_p⁻¹ (m², the paper's "PEB" without the root);
 * ``"minimax"``: max over the nodes of tr J_p⁻¹ (m²);
@@ -56,7 +56,7 @@ class DesignInputs:
     ``candidates`` (N, 3) m, ``nodes`` (P, 3) m, ``sigma`` (N,) m per candidate or (N, P)
     per candidate and node, and
     ``sigma_ref`` (m, their geometric mean): the solvers work with σ_n/σ_ref (σ
-    normalized to 1, SPEC §4) and rescale the results.
+    normalized to 1) and rescale the results.
     """
 
     candidates: np.ndarray
@@ -133,7 +133,7 @@ def design_inputs(
 
 # -- the FIM table and the criteria -----------------------------------------------------------
 def fim_table(candidates, nodes, sigma=1.0) -> np.ndarray:
-    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_pn² (SPEC §3).
+    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_pn² (paper eq. 6).
 
     ``sigma`` is a scalar, per candidate (N,), or per candidate and node (N, P).
 

@@ -1,4 +1,4 @@
-"""Particle swarm optimization of an anchor layout on the mounting surfaces (SPEC §4, paper §III-B).
+"""Particle swarm optimization of an anchor layout on the mounting surfaces (paper §III-B).
 
 A particle is a layout of M anchors (M × 3 numbers). Each iteration (paper eqs. 1–2)
 

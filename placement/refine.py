@@ -1,10 +1,10 @@
-"""Gradient refinement of an anchor layout on its mounting surfaces (CasADi + IPOPT, SPEC §4).
+"""Gradient refinement of an anchor layout on its mounting surfaces (CasADi + IPOPT).
 
 Each anchor keeps its surface and moves in that rectangle's in-plane coordinates (u, v)
 (:func:`placement.to_uv`); the rectangle is the variable bound, so every iterate stays on
 an allowed surface. The objective is built from one CasADi SX function of a single node,
 
-    PEB_p(x) = σ_ref · √tr J_p(x)⁻¹    (metres, SPEC §3; tr J⁻¹ by the adjugate formula),
+    PEB_p(x) = σ_ref · √tr J_p(x)⁻¹    (metres, paper eq. 7 with the root; adjugate formula),
 
 mapped over the P nodes (``Function.map``), and is either
 

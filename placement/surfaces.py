@@ -1,4 +1,4 @@
-"""Mounting surfaces: where anchors may go, and the projection back onto them (SPEC §4).
+"""Mounting surfaces: where anchors may go, and the projection back onto them (paper §II).
 
 Each allowed surface is an axis-aligned rectangle ``anchor_offset`` off its plane and at
 least ``anchor_offset`` in from the neighbouring planes. A point on a surface is written
@@ -169,5 +169,5 @@ def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = No
 
 
 def aim(room: Room, anchors) -> np.ndarray:
-    """(..., M, 3) unit aim vectors of the anchors toward the room centroid (SPEC §2)."""
+    """(..., M, 3) unit aim vectors of the anchors toward the room centroid (paper §V-A)."""
     return aim_vectors(anchors, room.centroid)

@@ -1,6 +1,6 @@
 """The shoebox room: geometry, materials, sound speed, mounting surfaces and the node grid.
 
-SPEC §2 ("techtile") gives every default. Surfaces are named after pyroomacoustics'
+Defaults: the paper's Techtile room (docs/model.md). Surfaces are named after pyroomacoustics'
 shoebox walls' compass convention: floor (z=0), ceiling (z=Lz), south (y=0),
 north (y=Ly), west (x=0), east (x=Lx).
 """
@@ -44,7 +44,7 @@ def _check_surface_names(names, what: str) -> None:
 
 @dataclass(frozen=True)
 class Room:
-    """A shoebox room with per-surface energy absorption (SPEC §2).
+    """A shoebox room with per-surface energy absorption.
 
     Attributes
     ----------
@@ -122,7 +122,7 @@ class Room:
     # -- constructors -------------------------------------------------------------------
     @classmethod
     def techtile(cls) -> Room:
-        """The paper's 8 × 4 × 2.4 m Techtile room (SPEC §2)."""
+        """The paper's 8 × 4 × 2.4 m Techtile room (§II)."""
         return cls()
 
     @classmethod
@@ -178,10 +178,10 @@ class Room:
     # -- derived quantities --------------------------------------------------------------
     @property
     def speed_of_sound(self) -> float:
-        """Speed of sound in m/s: c = 331.3·√(1 + T/273.15) (343.2 m/s at 20 °C, SPEC §2).
+        """Speed of sound in m/s: c = 331.3·√(1 + T/273.15) (343.2 m/s at 20 °C).
 
-        SPEC §2 writes c = 20·√(273 + T), which gives 342.3 m/s at 20 °C and contradicts
-        its own 343.2 m/s; we keep the stated value. ``sound_speed`` overrides both.
+        The authors' simulation framework uses c = 20·√(273 + T), 342.3 m/s at 20 °C
+        (docs/model.md, "Deliberate differences"). ``sound_speed`` overrides both.
         """
         if self.sound_speed is not None:
             return float(self.sound_speed)
@@ -254,7 +254,7 @@ class Room:
         return a
 
     def corners_layout(self) -> np.ndarray:
-        """(4, 3) the paper's non-optimized "corners" layout (SPEC §2), offset from the planes.
+        """(4, 3) the paper's non-optimized "corners" layout (§V-A), offset from the planes.
 
         For techtile: (0.03, 0.03, 0.03) south, (7.97, 3.97, 0.03) north, (7.97, 0.03, 2.37)
         and (0.03, 3.97, 2.37) ceiling.
