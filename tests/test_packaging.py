@@ -90,7 +90,9 @@ def test_installed_distribution_has_every_module_and_data_file():
                 p.relative_to(ROOT).as_posix() for p in sorted(path.glob(pattern)) if p.is_file()
             ]
     missing = [f for f in expected if f not in installed]
-    assert not missing, f"in the source tree but not installed: {missing}"
+    assert not missing, f"in the source tree but not in the distribution: {missing}"
+    absent = [f for f in expected if not Path(str(dist.locate_file(f))).is_file()]
+    assert not absent, f"listed by the distribution but not on disk: {absent}"
     assert dist.entry_points.select(group="console_scripts", name="anchorplan")
     assert any(Path(str(f)).name == "LICENSE" for f in dist.files)
 
