@@ -445,3 +445,44 @@ def test_cli_bounds_uses_the_zone_nodes(tmp_path, capsys):
     data = json.loads(out.read_text())
     assert len(data["peb"]) == len(Room.from_toml(OFFICE).grid())
     assert Room.from_dict(data["room"]) == Room.from_toml(OFFICE)
+
+
+# -- figures and report ----------------------------------------------------------------------
+def _gids(fig, gid):
+    return [a for ax in fig.axes for a in [*ax.patches, *ax.collections] if a.get_gid() == gid]
+
+
+def test_figures_draw_keepouts_and_zones():
+    from analysis import figures as F
+    from analysis import peb
+
+    room = Room.from_toml(OFFICE)
+    a = placement.random_layout(room, 6, np.random.default_rng(0))
+    fig = F.peb_map(room, a, heights=[1.2], y_cuts=[3.0], resolution=0.25, dpi=30)
+    assert len(_gids(fig, "keepouts")) == 2 * len(room.keepouts)
+    assert len(_gids(fig, "zones")) == 2 * len(room.zones)
+    nodes = room.grid()
+    fig = F.scatter3d(room, nodes, peb(a, nodes), a, dpi=30)
+    assert len(_gids(fig, "keepouts")) == 1 and len(_gids(fig, "zones")) == 1
+    fig = F.layout_views(room, {"a": a}, dpi=30)
+    assert len(_gids(fig, "keepouts")) == 1
+    # a plain room draws neither
+    plain = Room()
+    fig = F.peb_map(plain, plain.corners_layout(), resolution=0.5, dpi=30)
+    assert not _gids(fig, "keepouts") and not _gids(fig, "zones")
+
+
+def test_report_lists_keepouts_and_zones(tmp_path):
+    from analysis import report as rp
+
+    room = Room.from_toml(OFFICE)
+    a = placement.random_layout(room, 6, np.random.default_rng(0))
+    (tmp_path / "evaluation.json").write_text(
+        json.dumps({"room": room.to_dict(), "anchors": a.tolist()})
+    )
+    rep = rp.build_report(tmp_path, realizations=0, dpi=30)
+    assert "Keep-outs and tag zones" in rep.html
+    for name in ("windows", "door", "light 6", "desks", "meeting table"):
+        assert name in rep.html
+    assert f"The {len(room.grid())} evaluation nodes" in rep.html
+    assert "Keep-outs (hatched) and tag zones (dashed)" in rep.html
