@@ -93,7 +93,7 @@ class PhysicalRangeNoise:
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""
         a = np.asarray(anchors, dtype=float)
-        grid = self.room.grid(self.grid_shape)
+        grid = self.room.grid(self.grid_shape)  # the room grid, not the tag zones (SNR rule)
         d = np.linalg.norm(grid[:, None, :] - a[..., None, :, :], axis=-1)  # (..., G, M)
         closest = np.argmin(d, axis=-2)  # (..., M)
         amp = direct_amplitude(self.room, a, grid)  # (..., G, M)

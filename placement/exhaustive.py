@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.fim import SINGULAR_RTOL
-from placement.surfaces import candidate_grid, on_surfaces
+from placement.surfaces import allowed, candidate_grid
 from simulation.room import Room
 
 CRITERIA = ("A", "D", "minimax")
@@ -95,11 +95,12 @@ def design_inputs(
             raise ValueError(f"candidates: expected shape (N, 3) with N >= 1, got {cand.shape}")
         if not np.all(np.isfinite(cand)):
             raise ValueError("candidates: must be finite (no NaN or inf)")
-        off = np.flatnonzero(~on_surfaces(room, cand, tol=1e-6))
+        off = np.flatnonzero(~allowed(room, cand, tol=1e-6))
         if off.size:
             raise ValueError(
                 f"candidates: {off.size} point(s) are not on an allowed mounting surface "
-                f"{list(room.mounting)} (first: index {off[0]}, {cand[off[0]].tolist()}); "
+                f"{list(room.mounting)} or lie in a keep-out "
+                f"(first: index {off[0]}, {cand[off[0]].tolist()}); "
                 "use placement.project or placement.candidate_grid"
             )
     N = cand.shape[0]

@@ -31,6 +31,8 @@ DEFAULT_SNR_DB = 30.0
 def reference_nodes(room: Room, anchors, grid_shape=(9, 6, 5)) -> np.ndarray:
     """(M, 3) the grid node closest to each anchor (ties: the first in grid order)."""
     a = np.asarray(anchors, dtype=float)
+    # the regular room grid even when the room has tag zones: the SNR reference is a
+    # property of the room and its anchors, not of where tags are expected
     grid = room.grid(grid_shape)
     d = np.linalg.norm(grid[:, None, :] - a[None, :, :], axis=-1)  # (G, M)
     return grid[np.argmin(d, axis=0)]
