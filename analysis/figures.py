@@ -9,7 +9,7 @@ bounding box), so callers get the size they ask for.
 This module imports matplotlib; ``import analysis`` does not import it (use
 ``from analysis import figures``).
 
-Conventions: lengths in metres; PEB = √tr J⁻¹ in metres (SPEC §3); colour bars are
+Conventions: lengths in metres; PEB = √tr J⁻¹ in metres (docs/model.md); colour bars are
 labelled with their unit; non-finite values (a singular FIM gives PEB = +inf) are drawn
 in grey and never stretch a colour scale. Several layouts in one figure take a mapping
 name → array, drawn in the colours of :func:`layout_colors` so a layout keeps its colour
@@ -17,7 +17,9 @@ from figure to figure.
 
 Artists carry a ``gid`` so tests and users can find them: ``"anchors"`` (one anchor
 marker collection per axes, M points), ``"aim"`` (aim vectors), ``"nodes"``,
-``"cdf:NAME"`` / ``"peb:NAME"`` / ``"rmse:NAME"`` (one CDF line per layout).
+``"cdf:NAME"`` / ``"peb:NAME"`` / ``"rmse:NAME"`` (one CDF line per layout),
+``"keepouts"`` (the room's keep-out boxes: grey boxes in 3D, hatched rectangles projected
+onto plan and elevation views) and ``"zones"`` (its tag zones: dashed outlines).
 """
 
 from __future__ import annotations
@@ -60,6 +62,9 @@ CMAP = "viridis"
 BAD_COLOR = "0.78"
 #: default anchor marker colour when no layout name is given (the paper's orange squares)
 ANCHOR_COLOR = "#E69F00"
+#: keep-out boxes (grey, hatched in 2D) and tag-zone outlines (dashed)
+KEEPOUT_COLOR = "0.3"
+ZONE_COLOR = "0.1"
 #: CDF lines are reduced to at most this many points (quantiles) to keep figures fast
 _MAX_CDF_POINTS = 2000
 
@@ -214,6 +219,40 @@ def _values(v, name: str, n: int) -> np.ndarray:
 _AXES = "xyz"
 
 
+def _draw_regions2d(ax, room: Room, iu: int, iv: int) -> None:
+    """Keep-outs (hatched grey) and tag zones (dashed) projected onto the (iu, iv) plane."""
+    from matplotlib.patches import Rectangle
+
+    for boxes, keepout in ((room.keepouts, True), (room.zones, False)):
+        for lo, hi in boxes:
+            xy, w, h = (lo[iu], lo[iv]), hi[iu] - lo[iu], hi[iv] - lo[iv]
+            if keepout:
+                patch = Rectangle(
+                    xy,
+                    w,
+                    h,
+                    facecolor=(0.5, 0.5, 0.5, 0.45),
+                    edgecolor=KEEPOUT_COLOR,
+                    hatch="////",
+                    linewidth=0.8,
+                    zorder=2.5,
+                    gid="keepouts",
+                )
+            else:
+                patch = Rectangle(
+                    xy,
+                    w,
+                    h,
+                    fill=False,
+                    edgecolor=ZONE_COLOR,
+                    linestyle="--",
+                    linewidth=0.9,
+                    zorder=2.4,
+                    gid="zones",
+                )
+            ax.add_patch(patch)
+
+
 def peb_plane(
     room: Room, anchors, axis: int | str, value: float, sigma=0.04, resolution: float = 0.05
 ):
@@ -270,7 +309,8 @@ def peb_map(
     value (x–z plane); default heights: the room's mid height. All panels share one colour
     scale spanning the finite PEB over every panel (``vmax`` clips it) and one colour bar
     "PEB (m)". Anchors are projected onto each panel as numbered squares (numbers = row
-    in ``anchors``, from 1); grey cells are singular (PEB = ∞).
+    in ``anchors``, from 1), and so are the room's keep-outs (hatched) and tag zones
+    (dashed); grey cells are singular (PEB = ∞).
     """
     room = as_room(room)
     anchors = _as_points(anchors, "anchors")
@@ -304,6 +344,7 @@ def peb_map(
             interpolation="nearest",
             aspect="equal",
         )
+        _draw_regions2d(ax, room, iu, iv)
         ax.scatter(
             anchors[:, iu],
             anchors[:, iv],
@@ -362,8 +403,46 @@ def _outline():
 
 
 # -- 3D views -----------------------------------------------------------------------------------
+def _box_corners(lo, hi) -> np.ndarray:
+    """(8, 3) corners of a box, index bits (x, y, z) as in :func:`_room_box`."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i, j, k in _BITS])
+
+
+_BITS = [(i, j, k) for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+#: the 12 edges (corner pairs differing in one bit) and 6 faces (cyclic corners) of a box
+_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
+_FACES = [[0, 1, 3, 2], [4, 5, 7, 6], [0, 1, 5, 4], [2, 3, 7, 6], [0, 2, 6, 4], [1, 3, 7, 5]]
+
+
+def _draw_regions3d(ax, room: Room) -> None:
+    """Keep-outs as grey boxes and tag zones as dashed wire boxes."""
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+    if room.keepouts:
+        faces = [c[f] for lo, hi in room.keepouts for c in [_box_corners(lo, hi)] for f in _FACES]
+        ax.add_collection3d(
+            Poly3DCollection(
+                faces,
+                facecolors="0.45",
+                alpha=0.35,
+                edgecolors=KEEPOUT_COLOR,
+                linewidths=0.4,
+                gid="keepouts",
+            )
+        )
+    if room.zones:
+        edges = [
+            (c[a], c[b]) for lo, hi in room.zones for c in [_box_corners(lo, hi)] for a, b in _EDGES
+        ]
+        ax.add_collection3d(
+            Line3DCollection(edges, colors=ZONE_COLOR, linewidths=0.7, linestyles="--", gid="zones")
+        )
+
+
 def _room_box(ax, room: Room, zoom: float = 1.0) -> None:
-    """Room edges, the allowed mounting surfaces lightly shaded, equal-metre axes."""
+    """Room edges, the allowed mounting surfaces lightly shaded, keep-outs and tag zones,
+    equal-metre axes."""
     from matplotlib.ticker import MaxNLocator
     from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
@@ -384,6 +463,7 @@ def _room_box(ax, room: Room, zoom: float = 1.0) -> None:
     ax.add_collection3d(
         Poly3DCollection(faces, facecolors="0.5", alpha=0.07, edgecolors="none", gid="mounting")
     )
+    _draw_regions3d(ax, room)
     ax.set_xlim(0, L[0])
     ax.set_ylim(0, L[1])
     ax.set_zlim(0, L[2])
@@ -845,6 +925,7 @@ def dop_difference(
             mesh = ax.pcolormesh(
                 xe, ye, np.ma.masked_invalid(layer.T), cmap=cmap, norm=norm, gid="dop"
             )
+            _draw_regions2d(ax, room, 0, 1)
             for name, anc in marks:
                 if anc is not None:
                     anc = _as_points(anc, "anchors")

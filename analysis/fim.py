@@ -1,6 +1,6 @@
-"""Fisher information, CRLB, PEB and GDOP for range (time-of-flight) positioning (SPEC §3).
+"""Fisher information, CRLB, PEB and GDOP for range (time-of-flight) positioning (paper §IV).
 
-Range model (paper §IV, eq. 4): r_j = ‖p − a_j‖ + n_j, n_j ~ N(0, σ_j²) independent. Then
+Range model (paper §IV, eq. 3): r_j = ‖p − a_j‖ + n_j, n_j ~ N(0, σ_j²) independent. Then
 
     J(p) = Σ_j u_j u_jᵀ / σ_j²,      u_j = (p − a_j)/‖p − a_j‖,
 
@@ -107,7 +107,7 @@ def _chunked(a, p, sigma, fn):
 def fim(anchors, positions, sigma=0.04) -> np.ndarray:
     """Fisher information matrix J(p) for range measurements, (..., P, 3, 3) in 1/m².
 
-    J(p) = Σ_j u_j u_jᵀ / σ_j² (SPEC §3; paper eq. 6).
+    J(p) = Σ_j u_j u_jᵀ / σ_j² (paper eq. 6).
     """
     a, p = _as_inputs(anchors, positions)
 

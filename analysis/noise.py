@@ -1,4 +1,4 @@
-"""Range-noise models: the σ_j(p) that enters the Fisher information (SPEC §3).
+"""Range-noise models: the σ_j(p) that enters the Fisher information (paper eq. 6).
 
 - :class:`ConstantRangeNoise`: one σ for every anchor and node (default 0.04 m, the
   paper's 0.03–0.045 m).
@@ -48,7 +48,7 @@ def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
     """Direct-path amplitude A_j(p), (..., P, M), for a unit-amplitude chirp at the speaker.
 
     A = g(θ)·exp(−a·d/2)/(4π d): cardioid gain toward p (anchor aimed at the centroid),
-    air absorption and spherical spreading (SPEC §2). A node on an anchor gets +inf.
+    air absorption and spherical spreading (docs/model.md). A node on an anchor gets +inf.
     """
     room = as_room(room)
     a = checks.reals("anchors", anchors)
@@ -68,7 +68,7 @@ def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
 class PhysicalRangeNoise:
     """Range σ from the SNR at each node and the CRLB of time-delay estimation.
 
-    Per anchor j the white-noise variance is set as in SPEC §2: SNR = ``snr_db`` at the
+    Per anchor j the white-noise variance is set as in paper §V-A: SNR = ``snr_db`` at the
     grid node closest to the anchor, σ_w,j² = (A_j(p_ref)²/2)/10^(SNR/10) (A²/2 is the mean
     power of the direct-path sinusoid; multipath is not modelled here). At node p the
     received window is A_j(p)·s(t_n − τ), t_n = t_wake + n/fs, n = 0…N−1, τ = d/c. The CRLB
@@ -102,7 +102,7 @@ class PhysicalRangeNoise:
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""
         a = np.asarray(anchors, dtype=float)
-        grid = self.room.grid(self.grid_shape)
+        grid = self.room.grid(self.grid_shape)  # the room grid, not the tag zones (SNR rule)
         d = np.linalg.norm(grid[:, None, :] - a[..., None, :, :], axis=-1)  # (..., G, M)
         closest = np.argmin(d, axis=-2)  # (..., M)
         amp = direct_amplitude(self.room, a, grid)  # (..., G, M)
@@ -144,7 +144,7 @@ class PhysicalRangeNoise:
         return np.where(np.isfinite(s) & (f2 > 0), s, np.inf)
 
 
-# -- calibrated from simulated range errors (SPEC §3) ------------------------------------
+# -- calibrated from simulated range errors (paper §V-A) ----------------------------------
 
 #: 1/Φ⁻¹(¾): makes the median absolute deviation a consistent σ estimate for a Gaussian
 MAD_TO_SIGMA = 1.482602218505602
@@ -244,7 +244,7 @@ class MultipathRangeNoise:
     """σ_j(p) = √(σ0² + b_j(p)²) with b_j(p) the noise-free simulated range error.
 
     The bias b comes from the full chirp simulation without noise (image sources, cardioid
-    speakers, the SPEC §2 receiver): it is the error that reverberation and the receiver
+    speakers, the receiver chain): it is the error that reverberation and the receiver
     make deterministically at that anchor–node pair, which the Gaussian range model of the
     CRLB ignores. Treating it as extra variance gives a multipath-aware FIM: pairs whose
     range the receiver gets wrong carry little information. ``floor`` σ0 (m) stands for the

@@ -341,6 +341,12 @@ def build_report(
     zs = np.unique(np.round(nodes[:, 2], 9))
     heights = sorted({float(zs[0]), float(zs[len(zs) // 2]), float(zs[-1])})
 
+    regions_note = (
+        " Keep-outs (hatched) and tag zones (dashed) are projected too."
+        if room.keepouts or room.zones
+        else ""
+    )
+
     def add(title, caption, make):
         t = time.perf_counter()
         try:
@@ -355,7 +361,7 @@ def build_report(
         f"PEB map of the {best.name} layout",
         f"PEB = √tr J⁻¹ (m) at σ = {sigma:g} m on horizontal slices at the node heights and "
         f"a vertical cut at y = {room.size[1] / 2:g} m; anchors (numbered as in the "
-        "coordinate table) are projected onto each plane (paper Figs. 1, 2, 6).",
+        "coordinate table) are projected onto each plane (paper Figs. 1, 2, 6)." + regions_note,
         lambda: F.peb_map(
             room,
             best.anchors,
@@ -371,7 +377,10 @@ def build_report(
         "PEB at the evaluation nodes",
         f"The {len(nodes)} evaluation nodes coloured by PEB (m, σ = {sigma:g} m) on one "
         "colour scale; anchors with arrows along their aim (room centroid); shaded: the "
-        "allowed mounting surfaces.",
+        "allowed mounting surfaces"
+        + ("; grey boxes: keep-outs" if room.keepouts else "")
+        + ("; dashed: tag zones" if room.zones else "")
+        + ".",
         lambda: F.scatter3d_panels(
             room,
             nodes,
@@ -472,7 +481,8 @@ def build_report(
         notes.append("No simulated errors are available: simulated-error figures are skipped.")
     add(
         "Layouts",
-        "Every layout of the report; squares are anchors, arrows their aim (paper Fig. 7).",
+        "Every layout of the report; squares are anchors, arrows their aim (paper Fig. 7)."
+        + (" Grey boxes: keep-outs; dashed: tag zones." if room.keepouts or room.zones else ""),
         lambda: F.layout_views(room, {e.name: e.anchors for e in layouts}, colors=colors, dpi=dpi),
     )
     if result is not None and result.get("history") and result.get("best_anchors_history"):
@@ -612,6 +622,10 @@ def _table(header: list[str], rows: list[list[str]], left: int = 1, cls: str = "
     return f"<table{c}><thead><tr>{th}</tr></thead><tbody>{body}</tbody></table>"
 
 
+def _num_list(v) -> str:
+    return "[" + ", ".join(f"{float(x):g}" for x in v) + "]"
+
+
 def _swatch(color: str, name: str) -> str:
     return f'<span class="sw" style="background:{_e(color)}"></span>{_e(name)}'
 
@@ -737,7 +751,25 @@ def _render(
     # settings
     parts.append("<h2>Settings</h2>")
     parts.append("<h3>Room</h3>")
-    parts.append(_kv({**room.to_dict(), "speed_of_sound (m/s)": round(room.speed_of_sound, 3)}))
+    room_dict = room.to_dict()
+    regions = [("keep-out", b) for b in room_dict.pop("keepouts", [])]
+    regions += [("tag zone", b) for b in room_dict.pop("zones", [])]
+    parts.append(_kv({**room_dict, "speed_of_sound (m/s)": round(room.speed_of_sound, 3)}))
+    if regions:
+        parts.append("<h3>Keep-outs and tag zones</h3>")
+        parts.append(
+            '<p class="sub">Boxes in room coordinates (m). No anchor may lie in a keep-out '
+            "(hatched or grey in the figures); the room's evaluation nodes are a "
+            f"{room.zone_spacing:g} m grid over the tag zones (dashed).</p>"
+            if room.zones
+            else '<p class="sub">Boxes in room coordinates (m). No anchor may lie in a '
+            "keep-out (hatched or grey in the figures).</p>"
+        )
+        rows = [
+            [_e(kind), _e(b.get("name", "")), _e(_num_list(b["min"])), _e(_num_list(b["max"]))]
+            for kind, b in regions
+        ]
+        parts.append(_table(["kind", "name", "min (m)", "max (m)"], rows, left=2))
     if result is not None:
         run = {
             k: result[k]

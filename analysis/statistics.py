@@ -83,7 +83,7 @@ def ecdf(values) -> tuple[np.ndarray, np.ndarray]:
 
 
 def dop(position_errors, range_errors) -> np.ndarray:
-    """Per-node DOP = σ_pos / σ_r (SPEC §3, paper §V-A), (P,).
+    """Per-node RMS-based DOP = σ_pos / σ_r, (P,); the paper's (§V-A) uses the std, not the RMS.
 
     position_errors (R, P): Euclidean errors over R realizations; σ_pos is their RMS.
     range_errors (R, P, M): signed range errors; σ_r is the mean over anchors of their

@@ -11,7 +11,7 @@ from pathlib import Path
 # Run from a checkout without installing: make the top-level packages importable.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-#: the paper's Table I (SPEC §6): σ, mean and P95 of the Euclidean error in metres
+#: the paper's Table I (§V-B): σ, mean and P95 of the Euclidean error in metres
 PAPER_TABLE1 = {
     4: {"std": 0.803, "mean": 0.995, "p95": 2.629},
     6: {"std": 0.691, "mean": 0.913, "p95": 2.272},

@@ -61,11 +61,11 @@ from placement.serialization import to_jsonable  # noqa: E402
 from placement.surfaces import random_layout  # noqa: E402
 from simulation import Room, evaluate_layout  # noqa: E402
 
-SIGMA_R = 0.04  # m, range σ of the PEB (SPEC §3 default)
+SIGMA_R = 0.04  # m, range σ of the PEB (the library default, paper §V-A: 0.03-0.045 m)
 OUTLIER_M = 0.2  # m: a range error beyond this (5 σ_r) counts as an outlier range
 RATIO_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95, 1.0)
 
-#: paper values (SPEC §6): §V-A (Table I is PAPER_TABLE1 in _common)
+#: paper values, §V-A (Table I is PAPER_TABLE1 in _common)
 PAPER_CORNERS = {
     "corners": {"std": 1.362, "mean_dop": 2.52},
     "optimized": {"std": 0.811, "mean_dop": 1.74},
@@ -114,7 +114,7 @@ def validate(room: Room, anchors, realizations: int, seed: int, axis: bool) -> d
     robust = 1.4826 * float(np.median(np.abs(re - med)))
     outlier = np.abs(re) > OUTLIER_M
     # precision DOP: spread of the estimates about their own mean (no bias) over σ_r; the
-    # SPEC §3 DOP (ev.dop) uses the RMS error, which includes the multipath bias
+    # RMS-based DOP (ev.dop, docs/model.md) uses the RMS error, which includes the bias
     spread = np.sqrt(np.sum(np.var(np.asarray(ev.estimates), axis=0), axis=-1))
     sr = np.asarray(ev.range_std)
     dop_precision = np.full(sr.shape, np.inf)

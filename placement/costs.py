@@ -1,4 +1,4 @@
-"""Cost functions of a layout for the swarm (SPEC §4, paper §V-A).
+"""Cost functions of a layout for the swarm (paper §III-B, §V-A; docs/model.md, "Costs").
 
 A cost maps anchors (M, 3) and a numpy ``Generator`` (the evaluation's own noise stream)
 to a float, lower is better; +inf marks a layout that cannot be scored. The paper's cost

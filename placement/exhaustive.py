@@ -1,10 +1,10 @@
-"""Exhaustive search over all M-subsets of N candidate mounting points (SPEC §4).
+"""Exhaustive search over all M-subsets of N candidate mounting points (paper §III-A).
 
 The exact answer to the selection problem that :func:`placement.relax_select` bounds and
 rounds: every M-subset of the candidates is scored with the same criterion, so for small
 N and M the optimum is proved by enumeration (the tests use it to check the relaxation).
 
-Criteria (σ the range standard deviation, J_p the FIM of SPEC §3 at node p):
+Criteria (σ the range standard deviation, J_p the FIM of paper eq. 6 at node p):
 
 * ``"A"``: mean over the nodes of tr J_p⁻¹ (m², the paper's "PEB" without the root);
 * ``"minimax"``: max over the nodes of tr J_p⁻¹ (m²);
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.fim import SINGULAR_RTOL
-from placement.surfaces import candidate_grid, on_surfaces
+from placement.surfaces import allowed, candidate_grid
 from simulation import checks
 from simulation.room import Room, as_room
 
@@ -57,7 +57,7 @@ class DesignInputs:
     ``candidates`` (N, 3) m, ``nodes`` (P, 3) m, ``sigma`` (N,) m per candidate or (N, P)
     per candidate and node, and
     ``sigma_ref`` (m, their geometric mean): the solvers work with σ_n/σ_ref (σ
-    normalized to 1, SPEC §4) and rescale the results.
+    normalized to 1) and rescale the results.
     """
 
     candidates: np.ndarray
@@ -96,11 +96,12 @@ def design_inputs(
             raise ValueError(f"candidates: expected shape (N, 3) with N >= 1, got {cand.shape}")
         if not np.all(np.isfinite(cand)):
             raise ValueError("candidates: must be finite (no NaN or inf)")
-        off = np.flatnonzero(~on_surfaces(room, cand, tol=1e-6))
+        off = np.flatnonzero(~allowed(room, cand, tol=1e-6))
         if off.size:
             raise ValueError(
                 f"candidates: {off.size} point(s) are not on an allowed mounting surface "
-                f"{list(room.mounting)} (first: index {off[0]}, {cand[off[0]].tolist()}); "
+                f"{list(room.mounting)} or lie in a keep-out "
+                f"(first: index {off[0]}, {cand[off[0]].tolist()}); "
                 "use placement.project or placement.candidate_grid"
             )
     N = cand.shape[0]
@@ -135,7 +136,7 @@ def design_inputs(
 
 # -- the FIM table and the criteria -----------------------------------------------------------
 def fim_table(candidates, nodes, sigma=1.0) -> np.ndarray:
-    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_pn² (SPEC §3).
+    """(6, N, P) entries (xx, yy, zz, xy, xz, yz) of G_pn = u uᵀ/σ_pn² (paper eq. 6).
 
     ``sigma`` is a scalar, per candidate (N,), or per candidate and node (N, P).
 

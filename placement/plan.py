@@ -1,4 +1,4 @@
-"""The whole chain (SPEC §4): seeds → PSO on the simulated cost → validation.
+"""The whole chain: seeds → PSO on the simulated cost → validation (docs/model.md).
 
 ``seed_then_pso(room, M=8)`` builds seed layouts in two ways: simulation-driven, a local
 search over candidate mounting points on a table of simulated ranges
@@ -288,7 +288,7 @@ def seed_then_pso(
     finalists: int = 4,
     finalist_realizations: int = 10,
 ) -> PlacementResult:
-    """Plan M anchors: seeds → PSO on ``cost`` → validation (SPEC §4).
+    """Plan M anchors: seeds → PSO on ``cost`` → finalists → validation.
 
     cost : "variance" (paper), "mean", "p95", "rms" of the simulated Euclidean error with
         ``realizations`` noise realizations per evaluation; "peb" (mean PEB); or a callable

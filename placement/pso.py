@@ -1,4 +1,4 @@
-"""Particle swarm optimization of an anchor layout on the mounting surfaces (SPEC §4, paper §III-B).
+"""Particle swarm optimization of an anchor layout on the mounting surfaces (paper §III-B).
 
 A particle is a layout of M anchors (M × 3 numbers). Each iteration (paper eqs. 1–2)
 
@@ -216,19 +216,19 @@ def _evaluate_chunk(
 ) -> list:
     """Evaluate layouts (k, M, 3) in one worker; a failing evaluation gives (inf, message).
 
-    A layout whose anchors are collinear (or coincident) cannot position in 3D: inf.
+    A layout whose anchors are collinear (or coincident) cannot position in 3D: whatever
+    the cost says, it costs inf.
     """
     out = []
     for a, i in zip(layouts, ids, strict=True):
-        if len(a) >= 3 and checks.anchor_rank(a) < 2:
-            out.append((math.inf, None))
-            continue
         try:
             rng = evaluation_rng(seed, iteration, int(i))
             c = float(_timed(lambda a=a, rng=rng: cost(a, rng), eval_timeout))
             out.append((c if math.isfinite(c) else math.inf, None))
         except Exception as exc:  # noqa: BLE001 - one bad particle must not stop the run
             out.append((math.inf, f"{type(exc).__name__}: {exc}"))
+        if len(a) >= 3 and checks.anchor_rank(a) < 2:
+            out[-1] = (math.inf, out[-1][1])
     return out
 
 

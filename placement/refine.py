@@ -1,10 +1,13 @@
-"""Gradient refinement of an anchor layout on its mounting surfaces (CasADi + IPOPT, SPEC §4).
+"""Gradient refinement of an anchor layout on its mounting surfaces (CasADi + IPOPT).
 
 Each anchor keeps its surface and moves in that rectangle's in-plane coordinates (u, v)
 (:func:`placement.to_uv`); the rectangle is the variable bound, so every iterate stays on
-an allowed surface. The objective is built from one CasADi SX function of a single node,
+an allowed surface. With keep-outs the bound is one allowed rectangle of that surface
+(:func:`placement.allowed_rectangles`): the largest one containing the start (or the
+nearest one), so no iterate enters a keep-out. The objective is built from one CasADi SX
+function of a single node,
 
-    PEB_p(x) = σ_ref · √tr J_p(x)⁻¹    (metres, SPEC §3; tr J⁻¹ by the adjugate formula),
+    PEB_p(x) = σ_ref · √tr J_p(x)⁻¹    (metres, paper eq. 7 with the root; adjugate formula),
 
 mapped over the P nodes (``Function.map``), and is either
 
@@ -25,7 +28,7 @@ term for "smoothmax").
 
 σ is normalized to 1 inside (σ_j/σ_ref, σ_ref their geometric mean) and rescaled. The
 refinement is local: ``multistart`` adds random starts (uniform on each anchor's own
-surface) and keeps the best. IPOPT output is silenced unless ``verbose``. A failed solve,
+rectangle) and keeps the best. IPOPT output is silenced unless ``verbose``. A failed solve,
 a singular start (a node with PEB = inf) or a result no better than the start is reported
 in ``status`` and the input layout is returned unchanged.
 """
@@ -39,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from analysis.fim import peb
-from placement.surfaces import from_uv, mounting_surfaces, on_surfaces, to_uv
+from placement.surfaces import allowed, allowed_rectangles, from_uv, mounting_surfaces, to_uv
 from simulation import checks
 from simulation.room import Room, as_room
 
@@ -207,7 +210,7 @@ def refine_peb(
     sigma : range standard deviation (m), scalar or per anchor (M,).
     objective : "mean" (mean over nodes of PEB = √tr J⁻¹) or "smoothmax" (log-mean-exp).
     nodes : (P, 3) evaluation nodes (m); default ``room.grid()``.
-    multistart : extra random starts (each anchor uniform on its own surface).
+    multistart : extra random starts (each anchor uniform on its own allowed rectangle).
     seed : seed or ``numpy.random.Generator`` for the extra starts.
     verbose : let IPOPT print its log.
     hessian : "limited-memory" (default, faster) or "exact" (AD Hessian).
@@ -223,10 +226,10 @@ def refine_peb(
     a0 = room.check_anchors(checks.reals("anchors", anchors), min_anchors=4)
     checks.distinct("anchors", a0)
     M = a0.shape[0]
-    if not np.all(on_surfaces(room, a0, tol=1e-6)):
+    if not np.all(allowed(room, a0, tol=1e-6)):
         raise ValueError(
             f"anchors: every anchor must lie on an allowed mounting surface {list(room.mounting)}"
-            " (use placement.project)"
+            " outside the keep-outs (use placement.project)"
         )
     checks.choice("objective", objective, OBJECTIVES)
     checks.choice("hessian", hessian, ("limited-memory", "exact"))
@@ -281,6 +284,7 @@ def refine_peb(
     # variables: (u, v) of every anchor on its own rectangle; a = C x + c0
     idx, uv = to_uv(room, a0, tol=1e-6)
     surfs = mounting_surfaces(room)
+    rlo, rhi, ridx = allowed_rectangles(room)
     C = np.zeros((3 * M, 2 * M))
     c0 = np.zeros(3 * M)
     lbx, ubx = np.empty(2 * M), np.empty(2 * M)
@@ -288,7 +292,11 @@ def refine_peb(
         sf = surfs[k]
         c0[3 * j + sf.axis] = sf.offset
         C[3 * j + sf.uv_axes[0], 2 * j] = C[3 * j + sf.uv_axes[1], 2 * j + 1] = 1.0
-        lbx[2 * j : 2 * j + 2], ubx[2 * j : 2 * j + 2] = sf.lower, sf.upper
+        # the largest allowed rectangle of its surface holding the start, else the nearest
+        lo, hi = rlo[ridx == k][:, sf.uv_axes], rhi[ridx == k][:, sf.uv_axes]
+        gap = np.linalg.norm(np.clip(uv[j], lo, hi) - uv[j], axis=-1)
+        r = int(np.argmax(gap <= 1e-6)) if np.any(gap <= 1e-6) else int(np.argmin(gap))
+        lbx[2 * j : 2 * j + 2], ubx[2 * j : 2 * j + 2] = lo[r], hi[r]
     x0 = np.clip(uv.ravel(), lbx, ubx)
 
     opts = {

@@ -1,7 +1,7 @@
-"""Convex-relaxation selection of M anchors out of N candidates, with a certificate (SPEC §4).
+"""Convex-relaxation selection of M anchors out of N candidates, with a certificate.
 
 Selecting anchors is a Boolean design problem: w ∈ {0, 1}^N, Σ w = M, with the FIM at
-node p affine in w, J_p(w) = Σ_n w_n u_pn u_pnᵀ/σ_n² (SPEC §3). Relaxing w to [0, 1]^N
+node p affine in w, J_p(w) = Σ_n w_n u_pn u_pnᵀ/σ_n² (paper eq. 6). Relaxing w to [0, 1]^N
 gives a convex problem (cvxpy, solved by Clarabel) whose optimum lower-bounds every
 selection. Criteria, all *minimized* (see :mod:`placement.exhaustive` for the units):
 
@@ -406,7 +406,7 @@ def relax_select(
     starts: int = 8,
     solver_opts: dict | None = None,
 ) -> Selection:
-    """Choose M of N candidate mounting points by convex relaxation + rounding (SPEC §4).
+    """Choose M of N candidate mounting points by convex relaxation + rounding.
 
     Parameters
     ----------

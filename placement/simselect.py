@@ -1,6 +1,6 @@
 """Simulation-driven selection of M anchors among candidate mounting points.
 
-Anchors transmit one at a time (SPEC §2, TDM) and each anchor's noise level is set by its
+Anchors transmit one at a time (TDM, paper §II) and each anchor's noise level is set by its
 own closest grid node, so the range a node measures from an anchor depends on that
 anchor, that node and the noise only, not on the other anchors. Simulating every
 candidate point against every node once, for a few noise realizations (the *range

@@ -1,9 +1,17 @@
-"""Mounting surfaces: where anchors may go, and the projection back onto them (SPEC §4).
+"""Mounting surfaces: where anchors may go, and the projection back onto them (paper §II).
 
 Each allowed surface is an axis-aligned rectangle ``anchor_offset`` off its plane and at
 least ``anchor_offset`` in from the neighbouring planes. A point on a surface is written
 (surface index, u, v) with u, v the two in-plane coordinates in increasing axis order
 (ceiling: u = x, v = y; south/north: u = x, v = z; west/east: u = y, v = z).
+
+Keep-outs (``room.keepouts``): an anchor at p is forbidden iff p lies in a keep-out box,
+faces included (:func:`allowed`). The allowed region of a surface is its rectangle minus
+the footprints of the boxes its plane cuts, written as a union of allowed rectangles
+(:func:`allowed_rectangles`) that stop 1 µm (:data:`simulation.regions.EPS`) outside every
+box; :func:`project`, :func:`candidate_grid` and :func:`random_layout` only return points of
+those rectangles or, for the grid, points outside every box. ``surface_index``,
+``on_surfaces``, ``to_uv`` and ``from_uv`` describe the whole rectangles (geometry only).
 """
 
 from __future__ import annotations
@@ -15,6 +23,7 @@ import numpy as np
 
 from simulation import checks
 from simulation.directivity import aim_vectors
+from simulation.regions import footprints, free_cells, maximal_rectangles
 from simulation.room import SURFACES, Room, as_room
 
 #: most candidate points :func:`candidate_grid` makes, and most anchors of a random layout
@@ -80,16 +89,90 @@ def _bounds(room: Room) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
+def _to3d(s: MountingSurface, lo2: np.ndarray, hi2: np.ndarray):
+    lo = np.empty((len(lo2), 3))
+    hi = np.empty((len(lo2), 3))
+    lo[:, s.axis] = hi[:, s.axis] = s.offset
+    for k, a in enumerate(s.uv_axes):
+        lo[:, a], hi[:, a] = lo2[:, k], hi2[:, k]
+    return lo, hi
+
+
+#: (size, mounting, anchor_offset, keepouts) -> the result of _compute_regions
+_REGIONS: dict = {}
+
+
+def _compute_regions(room: Room):
+    """Read-only (cells, rectangles), each (lower (n, 3), upper (n, 3), surface index (n,))."""
+    out = {"cells": ([], [], []), "rects": ([], [], [])}
+    for i, s in enumerate(mounting_surfaces(room)):
+        blocks = footprints(room.keepouts, s.axis, s.offset, s.uv_axes)
+        for key, fn in (("cells", free_cells), ("rects", maximal_rectangles)):
+            lo2, hi2 = fn(s.lower, s.upper, blocks)
+            lo, hi = _to3d(s, lo2, hi2)
+            out[key][0].append(lo)
+            out[key][1].append(hi)
+            out[key][2].append(np.full(len(lo), i))
+    res = []
+    for key in ("cells", "rects"):
+        arrays = tuple(np.concatenate(a) for a in out[key])
+        for a in arrays:
+            a.setflags(write=False)
+        res.append(arrays)
+    return tuple(res)
+
+
+def _room_regions(room: Room):
+    key = (room.size, room.mounting, room.anchor_offset, room.keepouts)
+    regions = _REGIONS.get(key)
+    if regions is None:
+        if len(_REGIONS) >= 64:
+            _REGIONS.clear()
+        regions = _REGIONS[key] = _compute_regions(room)
+    return regions
+
+
+def allowed_rectangles(room: Room) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The allowed mounting region as rectangles: (lower (R, 3), upper (R, 3), surface (R,)).
+
+    Per surface (in the order of :func:`mounting_surfaces`, ``surface`` its index) the
+    maximal rectangles of its rectangle minus the keep-out footprints, largest first; they
+    may overlap and stop 1 µm outside every keep-out. Without keep-outs: one rectangle per
+    surface, the surface itself.
+    """
+    lo, hi, idx = _room_regions(room)[1]
+    return lo.copy(), hi.copy(), idx.copy()
+
+
+def allowed_area(room: Room) -> np.ndarray:
+    """(S,) allowed mounting area (m²) of each surface: its rectangle minus the keep-outs."""
+    lo, hi, idx = _room_regions(room)[0]
+    out = np.zeros(len(room.mounting))
+    for i, s in enumerate(mounting_surfaces(room)):
+        d = (hi - lo)[idx == i]
+        out[i] = np.sum(d[:, s.uv_axes[0]] * d[:, s.uv_axes[1]])
+    return out
+
+
+def allowed(room: Room, points, tol: float = 1e-9) -> np.ndarray:
+    """(...,) bool: each point may carry an anchor: on a mounting rectangle (within ``tol``
+    m) and in no keep-out box (closed, no tolerance)."""
+    p = np.asarray(points, dtype=float)
+    return on_surfaces(room, p, tol) & ~room.in_keepout(p)
+
+
 def project(room: Room, points) -> np.ndarray:
     """Project points (..., 3) onto the nearest allowed mounting rectangle (paper §III-B).
 
-    Each point goes to the closest point of the closest rectangle, so an anchor may jump
-    from one surface to another. Returns (..., 3).
+    Each point goes to the closest point of the closest allowed rectangle
+    (:func:`allowed_rectangles`), so an anchor may jump from one surface to another, and
+    never lands in a keep-out (at worst 1 µm farther than the true nearest allowed point).
+    Returns (..., 3).
     """
     p = checks.reals("points", points)
     if p.ndim < 1 or p.shape[-1] != 3:
         raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
-    lo, hi = _bounds(room)
+    lo, hi, _ = _room_regions(as_room(room))[1]
     cand = np.clip(p[..., None, :], lo, hi)  # (..., S, 3)
     dist = np.sum((cand - p[..., None, :]) ** 2, axis=-1)
     best = np.argmin(dist, axis=-1)
@@ -140,6 +223,9 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
 
     Each rectangle side gets ⌈length/spacing⌉ + 1 evenly spaced points including both
     edges. Shared edges between surfaces are not duplicated (they are 3 cm apart).
+    Points in a keep-out box are dropped, and every allowed rectangle
+    (:func:`allowed_rectangles`) left without a point gets its centre, so that each part
+    of the allowed region keeps a candidate.
     """
     spacing = checks.real("spacing", spacing, low=0.0, low_open=True, unit="m")
     n = 0
@@ -151,21 +237,29 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
             f"spacing: {spacing:g} m gives {n:.3g} candidate points, more than {MAX_CANDIDATES}; "
             "use a larger spacing"
         )
+    rlo, rhi, ridx = _room_regions(room)[1]
     pts = []
-    for s in mounting_surfaces(room):
+    for i, s in enumerate(mounting_surfaces(room)):
         axes = [
             np.linspace(lo, hi, max(2, int(np.ceil((hi - lo) / spacing - 1e-9)) + 1))
             for lo, hi in zip(s.lower, s.upper, strict=True)
         ]
         uv = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 2)
-        pts.append(s.point(uv))
+        p = s.point(uv)
+        if room.keepouts:
+            p = p[~room.in_keepout(p)]
+            lo, hi = rlo[ridx == i], rhi[ridx == i]
+            inside = np.all((p[:, None] >= lo - 1e-9) & (p[:, None] <= hi + 1e-9), axis=-1)
+            empty = ~inside.any(axis=0)
+            p = np.concatenate([p, (lo[empty] + hi[empty]) / 2])
+        pts.append(p)
     return np.concatenate(pts, axis=0)
 
 
 def area_counts(room: Room, M: int) -> np.ndarray:
-    """Anchors per surface in proportion to area (largest remainder): M = 4 → 1, 1, 2."""
+    """Anchors per surface in proportion to allowed area (largest remainder): M = 4 → 1, 1, 2."""
     M = checks.count("M", M, low=1, high=MAX_LAYOUT_ANCHORS)
-    areas = np.array([s.area for s in mounting_surfaces(room)])
+    areas = allowed_area(as_room(room))
     share = M * areas / areas.sum()
     counts = np.floor(share).astype(int)
     order = np.argsort(-(share - counts), kind="stable")
@@ -174,15 +268,27 @@ def area_counts(room: Room, M: int) -> np.ndarray:
 
 
 def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
-    """(M, 3) anchors uniformly random on the surfaces, counts by :func:`area_counts`."""
+    """(M, 3) anchors uniformly random on the allowed region, counts by :func:`area_counts`.
+
+    Within a surface the points are uniform over its allowed area (a cell of the allowed
+    region is drawn with probability ∝ its area, then a point uniformly in it).
+    """
     rng = checks.rng("rng", rng)
+    clo, chi, cidx = _room_regions(as_room(room))[0]
     out = []
-    for s, n in zip(mounting_surfaces(room), area_counts(room, M), strict=True):
-        uv = rng.uniform(s.lower, s.upper, size=(n, 2))
+    for i, (s, n) in enumerate(zip(mounting_surfaces(room), area_counts(room, M), strict=True)):
+        lo = clo[cidx == i][:, s.uv_axes]
+        hi = chi[cidx == i][:, s.uv_axes]
+        if len(lo) == 1:  # no keep-out on this surface: the same draws as without keep-outs
+            uv = rng.uniform(lo[0], hi[0], size=(n, 2))
+        else:
+            area = np.prod(hi - lo, axis=-1)
+            k = rng.choice(len(lo), size=n, p=area / area.sum())
+            uv = rng.uniform(lo[k], hi[k])
         out.append(s.point(uv))
     return np.concatenate(out, axis=0)
 
 
 def aim(room: Room, anchors) -> np.ndarray:
-    """(..., M, 3) unit aim vectors of the anchors toward the room centroid (SPEC §2)."""
+    """(..., M, 3) unit aim vectors of the anchors toward the room centroid (paper §V-A)."""
     return aim_vectors(anchors, as_room(room).centroid)

@@ -1,4 +1,4 @@
-"""The transmitted linear up-chirp (SPEC §2).
+"""The transmitted linear up-chirp (paper §II).
 
 s(t) = sin(2π(f0·t + ½·k·t²)) for 0 ≤ t ≤ T, zero elsewhere, k = (f1 − f0)/T. This is
 ``scipy.signal.chirp(t, f0, T, f1, method="linear", phi=270)``; the phase matters because

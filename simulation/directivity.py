@@ -1,4 +1,4 @@
-"""Anchor directivity: the cardioid speaker aimed at the room centroid (SPEC §2)."""
+"""Anchor directivity: the cardioid speaker aimed at the room centroid (paper §V-A)."""
 
 from __future__ import annotations
 

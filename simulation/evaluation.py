@@ -1,4 +1,4 @@
-"""Monte Carlo evaluation of an anchor layout with the full chirp simulator (SPEC §2, §3).
+"""Monte Carlo evaluation of an anchor layout with the full chirp simulator (docs/model.md).
 
 One realization: for every node and anchor, the received window (image-source multipath,
 :mod:`simulation.received`) plus AWGN (:mod:`simulation.noise`) goes through the receiver
@@ -221,7 +221,7 @@ class Evaluation:
 
     @property
     def rmse(self) -> np.ndarray:
-        """(P,) RMS over realizations of the Euclidean error (σ_pos of SPEC §3)."""
+        """(P,) RMS over realizations of the Euclidean error (σ_pos of :attr:`dop`)."""
         return np.sqrt(np.mean(self.errors**2, axis=0))
 
     @property
@@ -236,7 +236,7 @@ class Evaluation:
 
     @property
     def dop(self) -> np.ndarray:
-        """(P,) DOP = σ_pos / σ_r (SPEC §3); +inf where σ_r = 0 (e.g. one realization)."""
+        """(P,) RMS-based DOP = σ_pos / σ_r (paper §V-A uses the std); +inf where σ_r = 0."""
         sr = self.range_std
         out = np.full(sr.shape, np.inf)
         np.divide(self.rmse, sr, out=out, where=sr > 0)

@@ -1,4 +1,4 @@
-"""Image-source multipath in a shoebox room with a cardioid speaker (SPEC §2).
+"""Image-source multipath in a shoebox room with a cardioid speaker (paper §V-A).
 
 Every anchor j has image sources indexed by n = (nx, ny, nz) ∈ ℤ³ with |nx|+|ny|+|nz| ≤
 ``room.max_order`` (Allen & Berkley). Along an axis of length L, the image of a coordinate
@@ -118,7 +118,7 @@ class Paths:
 def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, aim_at=None) -> Paths:
     """Image-source paths from anchors (M, 3) to nodes (P, 3), vectorized over P × M × I.
 
-    ``aim_at`` (3,) is where the cardioids point (default the room centroid, SPEC §2).
+    ``aim_at`` (3,) is where the cardioids point (default the room centroid, paper §V-A).
     A node exactly on an image (d = 0) is not physical; such paths get A = 0.
     """
     room = as_room(room)

@@ -1,4 +1,4 @@
-"""Receiver noise: AWGN with a per-anchor variance set by the SNR rule of SPEC §2.
+"""Receiver noise: AWGN with a per-anchor variance set by the SNR rule of paper §V-A.
 
 For anchor j, the reference node is the node of the evaluation grid (``room.grid()``,
 default shape) closest to the anchor. Its noise-free received window y_ref (N samples, all
@@ -7,7 +7,7 @@ paths) has mean power P_j = mean(y_ref²), and the noise variance is
     σ_j² = P_j / 10^(SNR/10),
 
 the same at every node for that anchor, so the SNR falls with distance and off-axis angle
-(paper §IV: "the SNR is defined for the closest mobile node to a specific anchor"). Noise
+(paper §V-A: "the SNR is defined for the closest mobile node to a specific anchor"). Noise
 is white Gaussian, independent across samples, nodes, anchors and realizations, and is
 added to the received window before the receiver DSP.
 """
@@ -23,7 +23,7 @@ from simulation.received import received_windows
 from simulation.receiver import Receiver
 from simulation.room import Room, as_room
 
-#: default SNR at the grid node closest to each anchor, dB (SPEC §2)
+#: default SNR at the grid node closest to each anchor, dB (paper §V-A)
 DEFAULT_SNR_DB = 30.0
 #: accepted SNR range in dB (from noise 100× the signal power to practically noise-free)
 SNR_RANGE_DB = (-20.0, 120.0)
@@ -39,6 +39,8 @@ def reference_nodes(room: Room, anchors, grid_shape=(9, 6, 5)) -> np.ndarray:
     """(M, 3) the grid node closest to each anchor (ties: the first in grid order)."""
     room = as_room(room)
     a = checks.points("anchors", anchors)
+    # the regular room grid even when the room has tag zones: the SNR reference is a
+    # property of the room and its anchors, not of where tags are expected
     grid = room.grid(grid_shape)
     d = np.linalg.norm(grid[:, None, :] - a[None, :, :], axis=-1)  # (G, M)
     return grid[np.argmin(d, axis=0)]

@@ -1,4 +1,4 @@
-"""Least-squares positioning from ranges, batched over nodes and realizations (SPEC §2).
+"""Least-squares positioning from ranges, batched over nodes and realizations (paper §II).
 
 For each node, minimize F(x) = ½ Σ_j (‖x − a_j‖ − ρ_j)² over x ∈ ℝ³ with a damped
 Gauss–Newton method (Levenberg–Marquardt with Nielsen's damping update, per-node damping,

@@ -1,4 +1,4 @@
-"""The node's received window, synthesized from the analytic chirp (SPEC §2).
+"""The node's received window, synthesized from the analytic chirp (paper §II).
 
 The node samples at fs for N samples from t_wake after the chirp starts. The noise-free
 window of anchor j at node p is the superposition of the delayed, scaled chirps of its

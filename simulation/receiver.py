@@ -1,4 +1,4 @@
-"""Receiver configuration and DSP chain (SPEC §2).
+"""Receiver configuration and DSP chain (paper §II; docs/model.md, "The receiver chain").
 
 The node samples at ``fs`` and is awake for ``window`` (N) samples from ``t_wake`` seconds
 after the chirp starts. Each received window x (N,) goes through
@@ -45,7 +45,7 @@ from simulation.chirp import Chirp
 
 @dataclass(frozen=True)
 class Receiver:
-    """Sampling and DSP settings of the mobile node (SPEC §2 defaults)."""
+    """Sampling and DSP settings of the mobile node (defaults: docs/model.md)."""
 
     fs: float = 192e3
     t_wake: float = 29e-3
@@ -135,7 +135,7 @@ def snap_to_peak(curve: np.ndarray, index: np.ndarray, width: int = 32) -> np.nd
 
 
 def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | None = None) -> dict:
-    """The SPEC §2 DSP written literally for one window (N,); the definition of the chain.
+    """The receiver DSP written literally for one window (N,); the definition of the chain.
 
     Returns a dict with the high-passed window ``x_hp``, the raw curve ``corr`` = |c| (Nc,),
     the low-passed curve ``lowpassed``, the low-pass argmax ``k_lowpass`` and the snapped
@@ -174,7 +174,7 @@ PART_BYTES = 128 * 2**20
 
 
 class Dsp:
-    """Batched, fast form of the SPEC §2 receiver chain for one chirp and receiver.
+    """Batched, fast form of the receiver chain for one chirp and receiver.
 
     Build with :func:`dsp_for` (cached). ``indices(windows)`` maps windows (..., N) to the
     snapped full-correlation indices (...,) and ``ranges(windows, c)`` to metres.
@@ -302,7 +302,7 @@ class Dsp:
 def dsp_for(
     chirp: Chirp | None = None, receiver: Receiver | None = None, precision: str = "float64"
 ) -> Dsp:
-    """The (cached) :class:`Dsp` of a chirp and receiver (SPEC defaults when None)."""
+    """The (cached) :class:`Dsp` of a chirp and receiver (the defaults when None)."""
     return _dsp_cached(
         Chirp() if chirp is None else chirp,
         Receiver() if receiver is None else receiver,

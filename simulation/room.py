@@ -1,12 +1,13 @@
 """The shoebox room: geometry, materials, sound speed, mounting surfaces and the node grid.
 
-SPEC §2 ("techtile") gives every default. Surfaces are named after pyroomacoustics'
+Defaults: the paper's Techtile room (docs/model.md). Surfaces are named after pyroomacoustics'
 shoebox walls' compass convention: floor (z=0), ceiling (z=Lz), south (y=0),
 north (y=Ly), west (x=0), east (x=Lx).
 """
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -17,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from simulation import checks
+from simulation.regions import free_cells, in_boxes
 
 #: The six planes of a shoebox: name -> (axis, side), side 0 is the plane at 0, 1 at L.
 SURFACES: dict[str, tuple[int, int]] = {
@@ -55,7 +57,7 @@ def _check_surface_names(names, what: str) -> None:
 
 @dataclass(frozen=True)
 class Room:
-    """A shoebox room with per-surface energy absorption (SPEC §2).
+    """A shoebox room with per-surface energy absorption.
 
     Attributes
     ----------
@@ -74,6 +76,15 @@ class Room:
     sound_speed : optional explicit speed of sound in m/s (in [250, 450]), overriding
         temperature.
     name : a label used in reports.
+    keepouts : boxes ``(min_xyz, max_xyz)`` (m) where no anchor may go (windows, doors,
+        lamps, vents): an anchor at p is forbidden iff min ≤ p ≤ max on every axis (faces
+        included). Stored as a tuple of ((x0, y0, z0), (x1, y1, z1)) float tuples; items
+        may also be mappings ``{"min": [...], "max": [...], "name": ...}``. Every box lies
+        in the room, and no surface of ``mounting`` may be covered entirely.
+    zones : boxes ``(min_xyz, max_xyz)`` (m) where tags are expected; when given,
+        :meth:`grid` (the evaluation nodes) is a grid of ``zone_spacing`` over them.
+    zone_spacing : node spacing (m, > 0) of the zone grid.
+    keepout_names, zone_names : optional labels, one per box ("" when unnamed).
     """
 
     size: tuple[float, float, float] = (8.0, 4.0, 2.4)
@@ -86,6 +97,11 @@ class Room:
     node_margin: float = 0.05
     sound_speed: float | None = None
     name: str = "techtile"
+    keepouts: tuple = ()
+    zones: tuple = ()
+    zone_spacing: float = 0.5
+    keepout_names: tuple[str, ...] = ()
+    zone_names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         lo, hi = SIZE_RANGE
@@ -143,22 +159,79 @@ class Room:
         for fname in ("anchor_offset", "node_margin"):
             v = checks.real(fname, getattr(self, fname), low=0.0, high=half, high_open=True)
             object.__setattr__(self, fname, v)
+        self._init_boxes(size)
+
+    def _init_boxes(self, size) -> None:
+        """Normalize and check keep-outs and zones (after the other fields)."""
+        for field_, names_field in (("keepouts", "keepout_names"), ("zones", "zone_names")):
+            boxes, names = _boxes(getattr(self, field_), field_, size)
+            given = getattr(self, names_field)
+            given = (given,) if isinstance(given, str) else tuple(given)
+            if given:
+                if len(given) != len(boxes):
+                    raise ValueError(
+                        f"{names_field}: expected one name per box of {field_} "
+                        f"({len(boxes)}), got {len(given)}"
+                    )
+                names = tuple(str(n) for n in given)
+            object.__setattr__(self, field_, boxes)
+            object.__setattr__(self, names_field, names)
+        zs = self.zone_spacing
+        try:
+            ok = not isinstance(zs, bool) and math.isfinite(float(zs)) and float(zs) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ValueError(f"zone_spacing: must be a finite number > 0 m, got {zs!r}")
+        object.__setattr__(self, "zone_spacing", float(zs))
+        # every mounting surface keeps some allowed area
+        o = self.anchor_offset
+        for name in self.mounting:
+            axis, side = SURFACES[name]
+            uv = tuple(k for k in range(3) if k != axis)
+            offset = o if side == 0 else size[axis] - o
+            cut = [k for k, (lo, hi) in enumerate(self.keepouts) if lo[axis] <= offset <= hi[axis]]
+            blocks = [
+                ((lo[uv[0]], lo[uv[1]]), (hi[uv[0]], hi[uv[1]]))
+                for lo, hi in (self.keepouts[k] for k in cut)
+            ]
+            lo_, hi_ = free_cells((o, o), (size[uv[0]] - o, size[uv[1]] - o), blocks)
+            if not np.any(np.prod(hi_ - lo_, axis=-1) > 0):
+                raise ValueError(
+                    f"keepouts: boxes {cut} ({[[list(b[0]), list(b[1])] for b in blocks]} in "
+                    f"the plane) cover the whole mounting area of surface {name!r} (anchors "
+                    f"{o:g} m off the plane, at least {o:g} m from its edges); allowed: boxes "
+                    f"that leave part of it free, or remove {name!r} from mounting"
+                )
+        for k, (lo, hi) in enumerate(self.zones):
+            if len(self._zone_nodes(lo, hi)) == 0:
+                raise ValueError(
+                    f"zones[{k}]: no node of its {self.zone_spacing:g} m grid lies at least "
+                    f"node_margin = {self.node_margin:g} m from every plane, got min="
+                    f"{list(lo)} max={list(hi)}; allowed: a box that reaches into "
+                    f"[{self.node_margin:g}, L - {self.node_margin:g}] on every axis"
+                )
 
     # -- constructors -------------------------------------------------------------------
     @classmethod
     def techtile(cls) -> Room:
-        """The paper's 8 × 4 × 2.4 m Techtile room (SPEC §2)."""
+        """The paper's 8 × 4 × 2.4 m Techtile room (§II)."""
         return cls()
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Room:
         """Build a room from :meth:`to_dict` output (unknown keys raise ``ValueError``)."""
         checks.mapping("room", d, "a mapping of Room fields")
+        kw = dict(d)
+        for alias, fname in (("keepout", "keepouts"), ("zone", "zones")):  # TOML [[keepout]]
+            if alias in kw:
+                if fname in kw:
+                    raise ValueError(f"room: give either {alias!r} or {fname!r}, not both")
+                kw[fname] = kw.pop(alias)
         known = {f for f in cls.__dataclass_fields__}
-        unknown = [k for k in d if k not in known]
+        unknown = [k for k in kw if k not in known]
         if unknown:
             raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
-        kw = dict(d)
         if isinstance(kw.get("mounting"), list):
             kw["mounting"] = tuple(kw["mounting"])
         return cls(**kw)
@@ -167,8 +240,10 @@ class Room:
     def from_toml(cls, path: str | Path) -> Room:
         """Read a room from a TOML file with the keys of :meth:`to_dict`.
 
-        Every problem (missing, unreadable, empty or invalid file, a bad key or value)
-        raises ``ValueError`` naming the file.
+        Keep-outs and zones are arrays of tables, ``[[keepout]]`` and ``[[zone]]``, each
+        with ``min = [x, y, z]``, ``max = [x, y, z]`` and an optional ``name``. Every
+        problem (missing, unreadable, empty or invalid file, a bad key or value) raises
+        ``ValueError`` naming the file.
         """
         p = checks.input_file("room file", path)
         try:
@@ -203,6 +278,16 @@ class Room:
         }
         if self.sound_speed is not None:
             d["sound_speed"] = self.sound_speed
+        # only when set, so that the dictionary of a plain room is unchanged
+        for fname, names in (("keepouts", self.keepout_names), ("zones", self.zone_names)):
+            boxes = getattr(self, fname)
+            if boxes:
+                d[fname] = [
+                    {"min": list(lo), "max": list(hi), **({"name": n} if n else {})}
+                    for (lo, hi), n in zip(boxes, names, strict=True)
+                ]
+        if self.zones or self.zone_spacing != 0.5:
+            d["zone_spacing"] = self.zone_spacing
         return d
 
     def to_toml(self, path: str | Path) -> None:
@@ -211,21 +296,25 @@ class Room:
         lines = []
         d = self.to_dict()
         absorption = d.pop("absorption")
+        tables = {"keepout": d.pop("keepouts", []), "zone": d.pop("zones", [])}
         for k, v in d.items():
             lines.append(f"{k} = {_toml_value(v)}")
         lines.append("")
         lines.append("[absorption]")
         for k, v in absorption.items():
             lines.append(f"{k} = {_toml_value(v)}")
+        for key, items in tables.items():
+            for item in items:
+                lines += ["", f"[[{key}]]"] + [f"{k} = {_toml_value(v)}" for k, v in item.items()]
         Path(path).write_text("\n".join(lines) + "\n")
 
     # -- derived quantities --------------------------------------------------------------
     @property
     def speed_of_sound(self) -> float:
-        """Speed of sound in m/s: c = 331.3·√(1 + T/273.15) (343.2 m/s at 20 °C, SPEC §2).
+        """Speed of sound in m/s: c = 331.3·√(1 + T/273.15) (343.2 m/s at 20 °C).
 
-        SPEC §2 writes c = 20·√(273 + T), which gives 342.3 m/s at 20 °C and contradicts
-        its own 343.2 m/s; we keep the stated value. ``sound_speed`` overrides both.
+        The authors' simulation framework uses c = 20·√(273 + T), 342.3 m/s at 20 °C
+        (docs/model.md, "Deliberate differences"). ``sound_speed`` overrides both.
         """
         if self.sound_speed is not None:
             return float(self.sound_speed)
@@ -253,12 +342,19 @@ class Room:
             b[axis, side] = self.reflection(name)
         return b
 
-    def grid(self, shape: Sequence[int] = (9, 6, 5)) -> np.ndarray:
-        """(nx·ny·nz, 3) evaluation nodes, evenly spaced, ``node_margin`` from every plane.
+    def grid(self, shape: Sequence[int] | None = None) -> np.ndarray:
+        """(P, 3) evaluation nodes: the tag zones' grid, or a regular grid of the room.
 
-        Ordered with x slowest and z fastest. The default gives the paper's 270 nodes with
-        spacing 98.75 / 78.0 / 57.5 cm.
+        Without ``shape`` and with :attr:`zones`, the nodes are the zone grid (see
+        :meth:`zone_grid`). Otherwise (no zones, or an explicit ``shape``, e.g. for held-out
+        nodes) a regular (nx, ny, nz) grid of the whole room, evenly spaced,
+        ``node_margin`` from every plane, ordered with x slowest and z fastest; the
+        default (9, 6, 5) gives the paper's 270 nodes with spacing 98.75 / 78.0 / 57.5 cm.
         """
+        if shape is None:
+            if self.zones:
+                return self.zone_grid()
+            shape = (9, 6, 5)
         if not isinstance(shape, Sequence | np.ndarray) or len(shape) != 3:
             raise ValueError(f"shape: expected 3 integers >= 1, got {checks.describe(shape)}")
         shape = tuple(checks.count("shape", n, low=1) for n in shape)
@@ -270,6 +366,35 @@ class Room:
         ]
         g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
         return g.reshape(-1, 3)
+
+    def _zone_nodes(self, lo, hi) -> np.ndarray:
+        """(n, 3) grid nodes of one zone inside the node margin (see :meth:`zone_grid`)."""
+        axes = []
+        for a, b in zip(lo, hi, strict=True):
+            n = int(round((b - a) / self.zone_spacing)) + 1
+            axes.append(np.linspace(a, b, n) if n > 1 else np.array([(a + b) / 2]))
+        g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        return g[self.contains(g, margin=self.node_margin - 1e-9)]
+
+    def zone_grid(self) -> np.ndarray:
+        """(P, 3) the evaluation nodes of the tag zones (empty (0, 3) without zones).
+
+        Each zone side of length ℓ gets n = round(ℓ / zone_spacing) + 1 evenly spaced
+        levels from face to face (both faces included; the spacing is ℓ/(n − 1), exactly
+        ``zone_spacing`` when it divides ℓ; a side shorter than half the spacing gets one
+        level at its middle). Nodes closer than ``node_margin`` to a plane are dropped,
+        nodes shared by overlapping zones kept once (compared to 1e-9 m). Ordered zone by
+        zone, x slowest and z fastest within a zone.
+        """
+        if not self.zones:
+            return np.empty((0, 3))
+        g = np.concatenate([self._zone_nodes(lo, hi) for lo, hi in self.zones])
+        _, first = np.unique(np.round(g, 9), axis=0, return_index=True)
+        return g[np.sort(first)]
+
+    def in_keepout(self, points) -> np.ndarray:
+        """(...,) bool: points (..., 3) lie in a keep-out box (closed: faces included)."""
+        return in_boxes(self.keepouts, points).any(axis=-1)
 
     def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
         """(P,) bool: points (P, 3) lie inside the room, at least ``margin`` from each plane."""
@@ -300,10 +425,20 @@ class Room:
                 f"anchors: anchor(s) {np.flatnonzero(outside).tolist()} lie outside the room "
                 f"[0, {self.size[0]}] x [0, {self.size[1]}] x [0, {self.size[2]}] m"
             )
+        hits = in_boxes(self.keepouts, a)  # (M, B)
+        if np.any(hits):
+            bad = np.flatnonzero(hits.any(axis=1))
+            j, b = int(bad[0]), int(np.argmax(hits[bad[0]]))
+            label = f" ({self.keepout_names[b]!r})" if self.keepout_names[b] else ""
+            raise ValueError(
+                f"anchors: anchor(s) {bad.tolist()} lie in a keep-out box; anchor {j} at "
+                f"{a[j].tolist()} is in keepouts[{b}]{label} min={list(self.keepouts[b][0])} "
+                f"max={list(self.keepouts[b][1])} (use placement.project)"
+            )
         return a
 
     def corners_layout(self) -> np.ndarray:
-        """(4, 3) the paper's non-optimized "corners" layout (SPEC §2), offset from the planes.
+        """(4, 3) the paper's non-optimized "corners" layout (§V-A), offset from the planes.
 
         For techtile: (0.03, 0.03, 0.03) south, (7.97, 3.97, 0.03) north, (7.97, 0.03, 2.37)
         and (0.03, 3.97, 2.37) ceiling.
@@ -330,8 +465,69 @@ def _toml_value(v: Any) -> str:
         return "true" if v else "false"
     if isinstance(v, int | float):
         return repr(float(v)) if isinstance(v, float) else str(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, str):  # a JSON string is a valid TOML basic string (DEL escaped too)
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _vec3(v, what: str) -> tuple[float, float, float]:
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what}: expected 3 numbers [x, y, z] in metres, got {v!r}") from None
+    if a.shape != (3,):
+        raise ValueError(f"{what}: expected 3 numbers [x, y, z] in metres, got {v!r}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what}: coordinates must be finite (no NaN or inf), got {a.tolist()}")
+    return tuple(float(x) for x in a)
+
+
+def _boxes(items, what: str, size) -> tuple[tuple, tuple[str, ...]]:
+    """Normalize keep-out or zone boxes to ((min, max), ...) and their names; check them."""
+    if items is None:
+        items = ()
+    if isinstance(items, Mapping) or isinstance(items, str):
+        raise ValueError(f"{what}: expected a list of boxes (min_xyz, max_xyz), got {items!r}")
+    boxes, names = [], []
+    for k, item in enumerate(items):
+        w = f"{what}[{k}]"
+        if isinstance(item, Mapping):
+            extra = set(item) - {"min", "max", "name"}
+            if what == "zones" and "weight" in extra:
+                raise ValueError(
+                    f"{w}: zone weights are not supported (got weight = {item['weight']!r}); "
+                    "every node counts equally: remove 'weight' (allowed keys: min, max, name)"
+                )
+            if extra or not {"min", "max"} <= set(item):
+                raise ValueError(
+                    f"{w}: expected keys 'min', 'max' and optionally 'name', got {sorted(item)}"
+                )
+            lo, hi, name = item["min"], item["max"], item.get("name", "")
+            if not isinstance(name, str):
+                raise ValueError(f"{w}: name must be a string, got {name!r}")
+        else:
+            try:
+                lo, hi = item
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"{w}: expected a box (min_xyz, max_xyz) or "
+                    f"{{'min': [x, y, z], 'max': [x, y, z]}}, got {item!r}"
+                ) from None
+            name = ""
+        lo, hi = _vec3(lo, f"{w} min"), _vec3(hi, f"{w} max")
+        if any(a > b for a, b in zip(lo, hi, strict=True)):
+            raise ValueError(
+                f"{w}: inverted box, min {list(lo)} exceeds max {list(hi)} on some axis; "
+                "allowed: min <= max on every axis"
+            )
+        tol = 1e-9
+        if any(a < -tol for a in lo) or any(b > L + tol for b, L in zip(hi, size, strict=True)):
+            raise ValueError(
+                f"{w}: box min={list(lo)} max={list(hi)} is not inside the room; allowed: "
+                f"[0, {size[0]:g}] x [0, {size[1]:g}] x [0, {size[2]:g}] m"
+            )
+        boxes.append((lo, hi))
+        names.append(name)
+    return tuple(boxes), tuple(names)

@@ -1,12 +1,14 @@
 import json
 
 import numpy as np
+import pytest
 
 import placement
 from placement.cli import main
 from simulation import Room
 
 
+@pytest.mark.slow
 def test_plan_end_to_end_with_seeds_and_simulated_cost(tmp_path, capsys):
     out = tmp_path / "run"
     argv = [

@@ -106,7 +106,7 @@ def test_corners_layout_sanity_figure():
 
 
 def test_anechoic_noise_free_corners():
-    """Anechoic and noise-free, positions follow the (centimetre) SPEC-chain ranges."""
+    """Anechoic and noise-free, positions follow the (centimetre) receiver-chain ranges."""
     room = Room(absorption={k: 1.0 for k in ALL})
     ev = evaluate_layout(room, room.corners_layout(), noise=False)
     assert np.median(np.abs(ev.range_errors)) < 0.015

@@ -158,8 +158,8 @@ def test_range_formula_and_wake_time_with_an_oracle_seed():
     assert RX.range_from_index(RX.index_from_range(3.3, C), C) == pytest.approx(3.3)
 
 
-def test_anechoic_grid_ranges_spec_chain():
-    """Noise-free, anechoic: the SPEC chain's ranges are within centimetres of the truth.
+def test_anechoic_grid_ranges_reference_chain():
+    """Noise-free, anechoic: the receiver chain's ranges are within centimetres of the truth.
 
     Not millimetres: the 1 ms window holds a ~667 Hz slice of the sweep, so the envelope
     of |c| is flat over ±100 samples, and sampling |c| at 192 kHz aliases its harmonics at

@@ -23,13 +23,19 @@ def case(request):
     room, spacing = SETS[request.param]
     cand = placement.candidate_grid(room, spacing)
     assert 55 <= len(cand) <= 70
-    exact = placement.exhaustive_search(room, 4, candidates=cand, criterion="A")
-    return room, cand, exact
+    return room, cand
+
+
+@pytest.fixture(scope="module")
+def exact(case):
+    """The exhaustive M = 4 optimum (about 3 s per room): only the slow tests use it."""
+    room, cand = case
+    return placement.exhaustive_search(room, 4, candidates=cand, criterion="A")
 
 
 @pytest.mark.slow
-def test_M4_finds_exhaustive_optimum_with_valid_bound(case):
-    room, cand, exact = case
+def test_M4_finds_exhaustive_optimum_with_valid_bound(case, exact):
+    room, cand = case
     sel = placement.relax_select(room, 4, candidates=cand, criterion="A", seed=0)
     assert sel.status == "optimal" and sel.certified
     assert sel.value <= exact.value * 1.005
@@ -42,7 +48,7 @@ def test_M4_finds_exhaustive_optimum_with_valid_bound(case):
 
 
 def test_M8_certified_gap_within_5_percent(case):
-    room, cand, _ = case
+    room, cand = case
     sel = placement.relax_select(room, 8, candidates=cand, criterion="A", seed=0)
     assert sel.status == "optimal" and sel.certified
     assert 0 <= sel.gap <= 0.05
@@ -54,10 +60,11 @@ def test_M8_certified_gap_within_5_percent(case):
     assert np.all(others >= sel.lower_bound)
 
 
-def test_top_M_rounding_alone_fails_on_symmetric_room(case):
+@pytest.mark.slow
+def test_top_M_rounding_alone_fails_on_symmetric_room(case, exact):
     # the relaxed weights tie in symmetric groups; the top four are a poor (near-coplanar)
     # layout, which is why relax_select samples and runs a swap local search
-    room, cand, exact = case
+    room, cand = case
     inp = design_inputs(room, 4, cand, "A", 0.04, None)
     G = inp.table()
     w, *_ = relaxation._solve(G, 4, "A", None)

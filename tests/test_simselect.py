@@ -16,7 +16,7 @@ CAND = candidate_grid(ROOM, 2.0)
 
 
 def test_a_range_depends_on_its_own_anchor_only():
-    # the premise of the range table: TDM anchors, per-anchor noise level (SPEC §2)
+    # the premise of the range table: TDM anchors, per-anchor noise level (paper §V-A)
     a, b = CAND[[0, 5, 11, 17]], CAND[[0, 3, 8, 20]]
     ra = simulation.simulate_ranges(ROOM, a, NODES, noise=False)
     rb = simulation.simulate_ranges(ROOM, b, NODES, noise=False)
