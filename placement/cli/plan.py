@@ -61,8 +61,9 @@ def register(sub) -> None:
     p.add_argument(
         "--finalists",
         type=int,
-        default=4,
-        help="best distinct swarm layouts re-scored before choosing (4; 1: the swarm's best)",
+        default=None,
+        help="best distinct swarm layouts re-scored before choosing (4, at most --particles; "
+        "1: the swarm's best)",
     )
     p.add_argument(
         "--finalist-realizations",
@@ -130,7 +131,8 @@ def _check_args(args, room) -> None:
     checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
     checks.count("--realizations", args.realizations, low=1, high=MAX_REALIZATIONS)
     checks.count("--validate-realizations", args.validate_realizations, low=0)
-    checks.count("--finalists", args.finalists, low=1, high=MAX_PARTICLES)
+    if args.finalists is not None:  # an explicit value: at most one per particle
+        checks.count("--finalists", args.finalists, low=1, high=args.particles)
     checks.count(
         "--finalist-realizations", args.finalist_realizations, low=1, high=MAX_REALIZATIONS
     )
@@ -223,7 +225,7 @@ def run(args) -> int:
                     )
                     if value is not None  # unset: the library's default
                 },
-                finalists=args.finalists,
+                finalists=4 if args.finalists is None else args.finalists,
                 finalist_realizations=args.finalist_realizations,
                 executor=executor,
                 seed=args.seed,
