@@ -2,6 +2,7 @@
 damaged checkpoints, an unreachable scheduler."""
 
 import json
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -137,6 +138,9 @@ def test_eval_timeout_is_checked():
             pso(mean_peb, ROOM, 4, options=OPTIONS, eval_timeout=bad)
 
 
+@pytest.mark.skipif(
+    multiprocessing.get_start_method() != "fork", reason="the patched cost reaches forked workers"
+)
 def test_cli_rebuilds_its_pool_after_a_killed_worker(tmp_path, monkeypatch, capsys):
     flag = str(tmp_path / "killed")
     real = placement.PEBCost.__call__
@@ -252,7 +256,7 @@ def test_dead_scheduler_fails_fast(tmp_path, capsys):
     t0 = time.monotonic()
     argv = ["plan", "--scheduler", "tcp://127.0.0.1:9", "--out", str(tmp_path / "o")]
     assert main(argv) == 2
-    assert time.monotonic() - t0 < 5
+    assert time.monotonic() - t0 < 8  # a 3 s connection timeout, and dask's import
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--scheduler tcp://127.0.0.1:9: cannot connect" in err
     assert main(["plan", "--scheduler", "no address", "--out", str(tmp_path / "o")]) == 2
