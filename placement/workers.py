@@ -25,6 +25,7 @@ import signal
 import tempfile
 import threading
 import time
+import weakref
 from concurrent.futures import Executor, Future, InvalidStateError, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 
@@ -50,16 +51,17 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _watch_parent(parent: int) -> None:
+def _watch_parent(parent: int, markers: str) -> None:
     while True:
         time.sleep(PARENT_POLL)
-        if os.getppid() != parent:
-            os._exit(1)  # the parent died: do not linger as an orphan
+        if os.getppid() != parent:  # the parent died: do not linger as an orphan
+            shutil.rmtree(markers, ignore_errors=True)
+            os._exit(1)
 
 
-def _init_worker(parent: int) -> None:
-    """Worker initializer: exit when the parent process dies."""
-    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+def _init_worker(parent: int, markers: str) -> None:
+    """Worker initializer: exit (removing the pool's marker folder) when the parent dies."""
+    threading.Thread(target=_watch_parent, args=(parent, markers), daemon=True).start()
     # SIGINT goes to the whole process group on Ctrl-C: let the parent handle it
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
@@ -115,7 +117,8 @@ class WorkerPool(Executor):
         self._ids = itertools.count()
         self._tasks: dict[int, _Task] = {}
         self._broken: dict[int, list[_Task]] = {}
-        self._dir = tempfile.mkdtemp(prefix="anchorplan-pool-")
+        self._dir = tempfile.mkdtemp(prefix="anchorplan-pool-")  # which worker runs what
+        self._cleanup = weakref.finalize(self, shutil.rmtree, self._dir, True)
         self._shutdown = False
         self.lost = 0
         self.restarts = 0
@@ -128,7 +131,7 @@ class WorkerPool(Executor):
                     self._max_workers,
                     mp_context=self._mp_context,
                     initializer=_init_worker,
-                    initargs=(os.getpid(),),
+                    initargs=(os.getpid(), self._dir),
                 )
                 # the pool's own table of its processes (kept to read exit codes later)
                 self._pool_processes[id(self._pool)] = getattr(self._pool, "_processes", {})
@@ -256,7 +259,7 @@ class WorkerPool(Executor):
         if pool is not None:
             pool.shutdown(wait=wait, cancel_futures=cancel_futures)
         if wait:
-            shutil.rmtree(self._dir, ignore_errors=True)
+            self._cleanup()
 
     def __repr__(self) -> str:
         return f"WorkerPool(max_workers={self._max_workers})"
