@@ -107,38 +107,31 @@ def linear_start(anchors: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
     return lin if ok else None
 
 
-def _residuals(x, anchors, rho):
-    diff = x[:, None, :] - anchors  # (B, M, 3); anchors (M, 3) or one layout per row (B, M, 3)
-    dist = np.sqrt(np.einsum("bmk,bmk->bm", diff, diff))
-    r = dist - rho
-    unit = diff / np.where(dist > 0, dist, 1.0)[..., None]
-    return r, unit
+def _geometry(x, a, rho):
+    """Residuals (B, M) and unit vectors [3 × (B, M)] from anchors to points x [3 × (B,)];
+    anchor coordinates a [3 × (B or 1, M)]. Component arrays keep the loop memory-light."""
+    d = [x[k][:, None] - a[k] for k in range(3)]
+    dist = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    inv = 1.0 / np.where(dist > 0, dist, 1.0)
+    return dist - rho, [dk * inv for dk in d]
 
 
-def _solve_sym3(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve symmetric positive-definite 3 × 3 systems A (B, 3, 3) x = b (B, 3) by cofactors."""
-    a00, a01, a02 = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
-    a11, a12, a22 = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
-    c00 = a11 * a22 - a12 * a12
-    c01 = a02 * a12 - a01 * a22
-    c02 = a01 * a12 - a02 * a11
-    c11 = a00 * a22 - a02 * a02
-    c12 = a01 * a02 - a00 * a12
-    c22 = a00 * a11 - a01 * a01
-    det = a00 * c00 + a01 * c01 + a02 * c02
+def _solve_sym3(s00, s01, s02, s11, s12, s22, b0, b1, b2):
+    """Solve symmetric positive-definite 3 × 3 systems, given by their six distinct
+    entries (B,), for right-hand sides (b0, b1, b2) (B,) by cofactors."""
+    c00 = s11 * s22 - s12 * s12
+    c01 = s02 * s12 - s01 * s22
+    c02 = s01 * s12 - s02 * s11
+    c11 = s00 * s22 - s02 * s02
+    c12 = s01 * s02 - s00 * s12
+    c22 = s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
     det = np.where(det != 0, det, np.finfo(float).tiny)
-    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-    return (
-        np.stack(
-            [
-                c00 * b0 + c01 * b1 + c02 * b2,
-                c01 * b0 + c11 * b1 + c12 * b2,
-                c02 * b0 + c12 * b1 + c22 * b2,
-            ],
-            axis=-1,
-        )
-        / det[:, None]
-    )
+    return [
+        (c00 * b0 + c01 * b1 + c02 * b2) / det,
+        (c01 * b0 + c11 * b1 + c12 * b2) / det,
+        (c02 * b0 + c12 * b1 + c22 * b2) / det,
+    ]
 
 
 def locate(
@@ -175,6 +168,50 @@ def locate(
     every node of that layout gets status −1 and ``converged = False``. Ranges below
     −1 m (a noisy range may be slightly negative) raise ``ValueError``.
     """
+    a, rho, max_iter = _check_input(
+        anchors,
+        ranges,
+        max_iter,
+        (xtol, ftol, gtol),
+        {"bounded": bounded, "full_output": full_output},
+    )
+    M = a.shape[-2]
+    lead = rho.shape[:-1]
+    R = rho.reshape(-1, M)
+    owner, lo, hi, anc = _rows(a, len(R), region)
+    x = _start(a, R, owner, lo, hi, x0, lead)
+    if bounded:
+        x = np.clip(x, lo, hi)
+    start = x.copy()
+    x, cost, status, nit = _levenberg_marquardt(
+        anc, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
+    )
+    rank = np.asarray(checks.anchor_rank(a))
+    if np.any(rank < 2):  # collinear: rotation about the anchor line leaves ranges unchanged
+        bad = (rank < 2) if owner is None else (rank < 2)[owner]
+        status[np.broadcast_to(bad, status.shape)] = -1
+    converged = status > 0
+    if not np.all(converged):
+        logger.debug(
+            "locate: %d of %d nodes not converged (max_iter=%d)",
+            int(np.sum(~converged)),
+            len(R),
+            max_iter,
+        )
+    out = x.reshape(*lead, 3)
+    if not full_output:
+        return out
+    return PositionFix(
+        x=out,
+        converged=converged.reshape(lead),
+        status=status.astype(int).reshape(lead),
+        nit=nit.reshape(lead),
+        cost=cost.reshape(lead),
+        start=start.reshape(*lead, 3),
+    )
+
+
+def _check_input(anchors, ranges, max_iter, tols, flags) -> tuple[np.ndarray, np.ndarray, int]:
     a = checks.reals("anchors", anchors)
     if a.ndim not in (2, 3) or a.shape[-1] != 3 or a.shape[-2] < 3:
         raise ValueError(f"anchors: expected shape (M, 3) or (L, M, 3) with M >= 3, got {a.shape}")
@@ -197,25 +234,31 @@ def locate(
             f"negative), got {rho.min():g} m"
         )
     max_iter = checks.count("max_iter", max_iter, low=1)
-    for name, tol in (("xtol", xtol), ("ftol", ftol), ("gtol", gtol)):
+    for name, tol in zip(("xtol", "ftol", "gtol"), tols, strict=True):
         checks.real(name, tol, low=0.0)
-    checks.flag("bounded", bounded)
-    checks.flag("full_output", full_output)
-    lead = rho.shape[:-1]
-    R = rho.reshape(-1, M)
-    B = R.shape[0]
-    owner = None  # row -> layout, when there are several layouts
-    if a.ndim == 3:
-        owner = np.repeat(np.arange(a.shape[0]), B // a.shape[0])
-        if region is None:
-            lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
-        else:
-            lo, hi = _region(a[0], region)
-        anc = a[owner]  # (B, M, 3)
-    else:
-        lo, hi = _region(a, region)
-        anc = a
+    for name, flag in flags.items():
+        checks.flag(name, flag)
+    return a, rho, max_iter
 
+
+def _rows(a: np.ndarray, B: int, region):
+    """Per-row layout owner (B,) or None, the region's bounds (per row when several
+    layouts share no region) and the anchor coordinates as [3 × (B or 1, M)]."""
+    if a.ndim == 2:
+        lo, hi = _region(a, region)
+        return None, lo, hi, [a[None, :, k] for k in range(3)]
+    owner = np.repeat(np.arange(a.shape[0]), B // a.shape[0])
+    if region is None:
+        lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
+    else:
+        lo, hi = _region(a[0], region)
+    return owner, lo, hi, [np.ascontiguousarray(a[owner, :, k]) for k in range(3)]
+
+
+def _start(a, R, owner, lo, hi, x0, lead) -> np.ndarray:
+    """(B, 3) starting points: ``x0``, else the linear solution when inside the region,
+    else the region's centre."""
+    B = len(R)
     if x0 is not None:
         x0 = checks.reals("x0", x0)
         try:
@@ -224,95 +267,119 @@ def locate(
             raise ValueError(f"x0: expected shape (3,) or (..., P, 3), got {x0.shape}") from None
         if not np.all(np.isfinite(x)):
             raise ValueError("x0: must be finite")
-    else:
-        x = np.broadcast_to((lo + hi) / 2, (B, 3)).copy()
-        lin, ok = _linear_solution(a, R, owner)
-        inside = ok & np.all((lin >= lo) & (lin <= hi), axis=1)
-        x[inside] = lin[inside]
-    if bounded:
-        x = np.clip(x, lo, hi)
-    start = x.copy()
+        return x
+    x = np.broadcast_to((lo + hi) / 2, (B, 3)).copy()
+    lin, ok = _linear_solution(a, R, owner)
+    inside = ok & np.all((lin >= lo) & (lin <= hi), axis=1)
+    x[inside] = lin[inside]
+    return x
 
-    r, unit = _residuals(x, anc, R)
+
+def _levenberg_marquardt(anc, R, x, lo, hi, bounded, max_iter, tols):
+    """Damped Gauss–Newton (Levenberg–Marquardt, Nielsen's damping update) on every row
+    at once: ranges R (B, M), anchors [3 × (B or 1, M)], starts x (B, 3). Returns the
+    positions (B, 3), costs ½Σr² (B,), statuses (B,) and iterations (B,). Finished rows
+    leave the working set, so the loop runs on the still-active rows only."""
+    xtol, ftol, gtol = tols
+    B = len(R)
+    per_row = anc[0].shape[0] == B and B > 1
+    xs = [x[:, k].copy() for k in range(3)]
+    r, _ = _geometry(xs, anc, R)
     cost = 0.5 * np.sum(r * r, axis=1)
     status = np.zeros(B, dtype=np.int8)
     nit = np.zeros(B, dtype=np.int32)
     status[cost == 0] = 4
-    # iterate on compact copies of the still-active nodes; finished nodes are written back
     idx = np.flatnonzero(status == 0)
-    xa, ra, ua, ca, Ra = x[idx], r[idx], unit[idx], cost[idx], R[idx]
-    per_row = owner is not None
-    Aa = anc[idx] if per_row else anc
-    la, ha = (lo[idx], hi[idx]) if lo.ndim == 2 else (lo, hi)
-    lam = np.full(idx.size, 1e-3)  # Nielsen's τ·max diag(JᵀJ); the diagonal is O(1) here
-    nu = np.full(idx.size, 2.0)
-    eye = np.eye(3)
-    for it in range(1, int(max_iter) + 1):
+    s = _State(
+        [v[idx] for v in xs], *_geometry([v[idx] for v in xs], _take(anc, idx, per_row), R[idx])
+    )
+    s.cost, s.rho = cost[idx], R[idx]
+    s.anc = _take(anc, idx, per_row)
+    s.lo, s.hi = (lo[idx], hi[idx]) if lo.ndim == 2 else (lo, hi)
+    s.lam, s.nu = np.full(idx.size, 1e-3), np.full(idx.size, 2.0)
+    for it in range(1, max_iter + 1):
         if idx.size == 0:
             break
-        g = np.einsum("bm,bmk->bk", ra, ua)  # Jᵀr
-        JtJ = np.einsum("bmi,bmj->bij", ua, ua)
-        small_g = np.max(np.abs(g), axis=1) <= gtol
-        step = _solve_sym3(JtJ + lam[:, None, None] * eye, -g)
-        xn = xa + step
-        if bounded:
-            xn = np.clip(xn, la, ha)
-            step = xn - xa
-        rn, un = _residuals(xn, Aa, Ra)
-        cn = 0.5 * np.einsum("bm,bm->b", rn, rn)
-        # predicted reduction of the damped model: ½ δᵀ(λδ − g)
-        pred = 0.5 * np.einsum("bk,bk->b", step, lam[:, None] * step - g)
-        actual = ca - cn
-        rho_ratio = np.where(pred > 0, actual / np.where(pred > 0, pred, 1.0), -1.0)
-        ok = (rho_ratio > 0) & np.isfinite(cn)
-        # convergence tests (gradient before the step; step, cost change after it)
-        snorm = np.sqrt(np.einsum("bk,bk->b", step, step))
-        small_x = snorm <= xtol * (np.sqrt(np.einsum("bk,bk->b", xa, xa)) + xtol)
-        small_f = ok & (actual <= ftol * ca) & (pred <= ftol * ca)
-        zero = ok & (cn == 0)
-        # accept / reject with Nielsen's damping update
-        xa = np.where(ok[:, None], xn, xa)
-        ra = np.where(ok[:, None], rn, ra)
-        ua = np.where(ok[:, None, None], un, ua)
-        ca = np.where(ok, cn, ca)
-        fac = np.maximum(1.0 / 3.0, 1.0 - (2.0 * rho_ratio - 1.0) ** 3)
-        lam = np.where(ok, lam * fac, lam * nu)
-        nu = np.where(ok, 2.0, 2.0 * nu)
-        st = np.zeros(idx.size, dtype=np.int8)
-        st[small_g] = 1
-        st[small_f & (st == 0)] = 2
-        st[small_x & (st == 0)] = 3
-        st[zero] = 4
-        # a damping that overflows means no descent direction is left: stationary point
-        st[(st == 0) & ~np.isfinite(lam * 1e3)] = 1
-        done = st > 0
-        if np.any(done) or it == max_iter:
-            fin = done | (it == max_iter)
+        st = _lm_iteration(s, bounded, xtol, ftol, gtol)
+        fin = (st > 0) | (it == max_iter)
+        if np.any(fin):
             j = idx[fin]
-            x[j], cost[j], status[j], nit[j] = xa[fin], ca[fin], st[fin], it
-            keep = ~fin
-            idx, xa, ra, ua, ca, Ra = idx[keep], xa[keep], ra[keep], ua[keep], ca[keep], Ra[keep]
-            lam, nu = lam[keep], nu[keep]
-            if per_row:
-                Aa = Aa[keep]
-            if lo.ndim == 2:
-                la, ha = la[keep], ha[keep]
+            for k in range(3):
+                xs[k][j] = s.x[k][fin]
+            cost[j], status[j], nit[j] = s.cost[fin], st[fin], it
+            idx = idx[~fin]
+            s.keep(~fin, per_row, lo.ndim == 2)
+    return np.stack(xs, axis=-1), cost, status, nit
 
-    rank = np.asarray(checks.anchor_rank(a))
-    if np.any(rank < 2):  # collinear: rotation about the anchor line leaves ranges unchanged
-        bad = (rank < 2) if owner is None else (rank < 2)[owner]
-        status[np.broadcast_to(bad, status.shape)] = -1
-    converged = status > 0
-    if not np.all(converged):
-        logger.debug("locate: %d of %d nodes hit max_iter=%d", int(np.sum(~converged)), B, max_iter)
-    out = x.reshape(*lead, 3)
-    if not full_output:
-        return out
-    return PositionFix(
-        x=out,
-        converged=converged.reshape(lead),
-        status=status.astype(int).reshape(lead),
-        nit=nit.reshape(lead),
-        cost=cost.reshape(lead),
-        start=start.reshape(*lead, 3),
+
+def _take(anc, idx, per_row):
+    return [v[idx] for v in anc] if per_row else anc
+
+
+class _State:
+    """The active rows of the Levenberg–Marquardt loop."""
+
+    def __init__(self, x, r, u):
+        self.x, self.r, self.u = x, r, u
+
+    def keep(self, mask, per_row: bool, row_bounds: bool) -> None:
+        self.x = [v[mask] for v in self.x]
+        self.u = [v[mask] for v in self.u]
+        self.r, self.cost, self.rho = self.r[mask], self.cost[mask], self.rho[mask]
+        self.lam, self.nu = self.lam[mask], self.nu[mask]
+        if per_row:
+            self.anc = [v[mask] for v in self.anc]
+        if row_bounds:
+            self.lo, self.hi = self.lo[mask], self.hi[mask]
+
+
+def _lm_iteration(s: _State, bounded: bool, xtol, ftol, gtol) -> np.ndarray:
+    """One damped step on every active row; updates ``s`` and returns each row's status
+    (0 still running, else the convergence code of :data:`STATUS_MESSAGES`)."""
+    u, lam = s.u, s.lam
+    g = [np.sum(s.r * uk, axis=1) for uk in u]  # Jᵀr
+    small_g = np.maximum(np.maximum(np.abs(g[0]), np.abs(g[1])), np.abs(g[2])) <= gtol
+    step = _solve_sym3(
+        np.sum(u[0] * u[0], axis=1) + lam,
+        np.sum(u[0] * u[1], axis=1),
+        np.sum(u[0] * u[2], axis=1),
+        np.sum(u[1] * u[1], axis=1) + lam,
+        np.sum(u[1] * u[2], axis=1),
+        np.sum(u[2] * u[2], axis=1) + lam,
+        -g[0],
+        -g[1],
+        -g[2],
     )
+    xn = [s.x[k] + step[k] for k in range(3)]
+    if bounded:
+        xn = [np.clip(xn[k], s.lo[..., k], s.hi[..., k]) for k in range(3)]
+        step = [xn[k] - s.x[k] for k in range(3)]
+    rn, un = _geometry(xn, s.anc, s.rho)
+    cn = 0.5 * np.sum(rn * rn, axis=1)
+    # predicted reduction of the damped model: ½ δᵀ(λδ − g)
+    pred = 0.5 * sum(step[k] * (lam * step[k] - g[k]) for k in range(3))
+    actual = s.cost - cn
+    ratio = np.where(pred > 0, actual / np.where(pred > 0, pred, 1.0), -1.0)
+    ok = (ratio > 0) & np.isfinite(cn)
+    # convergence tests (gradient before the step; step, cost change after it)
+    snorm = np.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2])
+    xnorm = np.sqrt(s.x[0] * s.x[0] + s.x[1] * s.x[1] + s.x[2] * s.x[2])
+    small_x = snorm <= xtol * (xnorm + xtol)
+    small_f = ok & (actual <= ftol * s.cost) & (pred <= ftol * s.cost)
+    zero = ok & (cn == 0)
+    # accept / reject with Nielsen's damping update
+    s.x = [np.where(ok, xn[k], s.x[k]) for k in range(3)]
+    s.r = np.where(ok[:, None], rn, s.r)
+    s.u = [np.where(ok[:, None], un[k], u[k]) for k in range(3)]
+    s.cost = np.where(ok, cn, s.cost)
+    fac = np.maximum(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
+    s.lam = np.where(ok, lam * fac, lam * s.nu)
+    s.nu = np.where(ok, 2.0, 2.0 * s.nu)
+    st = np.zeros(len(ok), dtype=np.int8)
+    st[small_g] = 1
+    st[small_f & (st == 0)] = 2
+    st[small_x & (st == 0)] = 3
+    st[zero] = 4
+    # a damping that overflows means no descent direction is left: stationary point
+    st[(st == 0) & ~np.isfinite(s.lam * 1e3)] = 1
+    return st
