@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import peb
+from simulation import checks
 from simulation.room import Room
 
 #: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost
@@ -50,8 +51,7 @@ class SimulatedCost:
             raise ValueError(
                 f"statistic: unknown {self.statistic!r}; allowed: {list(SIMULATED_STATISTICS)}"
             )
-        if int(self.realizations) != self.realizations or self.realizations < 1:
-            raise ValueError(f"realizations: must be an integer >= 1, got {self.realizations}")
+        checks.count("realizations", self.realizations, low=1, high=100_000)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator) -> float:
         from simulation.evaluation import evaluate_layout
@@ -71,6 +71,69 @@ class SimulatedCost:
 
 
 @dataclass(frozen=True)
+class DrawsCost:
+    """A statistic of the simulated Euclidean errors over fixed scene draws (common random
+    numbers): every layout is scored on the same node sets, mounting errors and noise.
+
+    The layout's M anchors are simulated exactly as M candidates of a range table
+    (:func:`placement.rangetable.range_table`) with ``nodes`` (D, P, 3), anchor slot m
+    taking the streams of candidate m: the first ``exact_draws`` draws keep the planned
+    points, the others mount each anchor within ``mount_tolerance`` (m) of its planned
+    point in its surface plane; positioning uses the planned points. The cost is then a
+    deterministic function of the layout (the generator is ignored), so a swarm compares
+    its particles without noise between them (docs/model.md, "Robust cost").
+    """
+
+    room: Room
+    nodes: np.ndarray
+    exact_draws: int = 1
+    mount_tolerance: float = 0.0
+    seed: int = 0
+    statistic: str = "variance"
+    precision: str = "float32"
+
+    def __post_init__(self) -> None:
+        if self.statistic not in SIMULATED_STATISTICS:
+            raise ValueError(
+                f"statistic: unknown {self.statistic!r}; allowed: {list(SIMULATED_STATISTICS)}"
+            )
+        nodes = np.asarray(self.nodes, dtype=float)
+        if nodes.ndim != 3 or nodes.shape[-1] != 3:
+            raise ValueError(f"nodes: expected shape (D, P, 3), got {nodes.shape}")
+
+    @property
+    def draws(self) -> int:
+        return int(np.shape(self.nodes)[0])
+
+    def errors(self, anchors) -> np.ndarray:
+        """(D · P,) Euclidean position errors (m) of the layout over every draw and node."""
+        from placement.rangetable import range_table, table_errors
+
+        a = np.asarray(anchors, dtype=float)
+        table = range_table(
+            self.room,
+            a,
+            self.nodes,
+            exact_draws=self.exact_draws,
+            mount_tolerance=self.mount_tolerance,
+            seed=self.seed,
+            chunk=len(a),
+            precision=self.precision,
+        )
+        return table_errors(table, np.arange(len(a))[None])[0]
+
+    def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
+        from simulation.checks import anchor_rank
+
+        if anchor_rank(anchors) < 2:  # collinear: the position is not determined
+            return math.inf
+        e = self.errors(anchors)
+        if not np.all(np.isfinite(e)):
+            return math.inf
+        return SIMULATED_STATISTICS[self.statistic](e)
+
+
+@dataclass(frozen=True)
 class PEBCost:
     """Mean PEB = mean over nodes of √tr J⁻¹ (metres) for a constant range σ; bound-driven.
 
@@ -80,6 +143,9 @@ class PEBCost:
     room: Room = field(default_factory=Room.techtile)
     sigma: float = 0.04
     nodes: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        checks.real("sigma", self.sigma, low=0.0, high=10.0, low_open=True, unit="m")
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
         nodes = self.room.grid() if self.nodes is None else self.nodes

@@ -1,32 +1,51 @@
-"""The whole chain: seeds → PSO on the simulated cost → validation (docs/model.md).
+"""The whole chain: search → swarm → finalists → validation (docs/model.md, "Planning").
 
-``seed_then_pso(room, M=8)`` builds seed layouts in two ways: simulation-driven, a local
-search over candidate mounting points on a table of simulated ranges
-(:mod:`placement.simselect`), and bound-driven, the A- and D-optimal convex relaxations,
-their gradient refinements and the best of many random layouts by PEB. It puts them into
-the swarm beside random particles, runs the swarm on the full chirp simulation, and
-validates the winner with many noise realizations.
+``seed_then_pso(room, M=8)`` plans M anchors for a simulated cost:
+
+1. **Range table and search** (:mod:`placement.rangetable`, :mod:`placement.simselect`):
+   every candidate mounting point is simulated at the nodes of a few scene draws (the
+   exact nodes, and nodes moved within their cells with the anchors mounted within
+   ``mount_tolerance``); a multi-start, multi-resolution swap search on the table finds
+   the seed layouts.
+2. **Swarm** (:mod:`placement.pso`): a particle swarm started around the seeds refines
+   them in continuous positions on the surfaces, every particle scored on the same scene
+   draws as the table (common random numbers, :class:`placement.costs.DrawsCost`).
+3. **Finalists**: the swarm's best distinct layouts and the seeds are scored on fresh
+   draws (new nodes, mounting errors and noise) and the lowest is chosen, so that a
+   layout fitted to the draws it was optimized on does not win by luck.
+4. **Validation** (:mod:`placement.validation`): the chosen layout at the evaluation nodes
+   with many noise realizations (the paper's statistics), at held-out nodes, and under
+   mounting error.
+
+Bound-driven costs ("peb") and user callables skip step 1 and seed the swarm with the
+convex relaxations and their refinements instead (:func:`analytic_seeds`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import logging
 import math
 import time
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from analysis.fim import peb
-from placement.costs import SimulatedCost, cost_name, make_cost
+from placement.costs import DrawsCost, cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
+from placement.rangetable import node_draws
 from placement.serialization import to_jsonable
+from placement.simselect import SearchOptions
 from placement.surfaces import random_layout
-from simulation.room import Room
+from placement.validation import ValidationOptions, validate_layout
+from simulation import checks
+from simulation.room import Room, as_room
 
 logger = logging.getLogger(__name__)
 
@@ -157,286 +176,555 @@ def analytic_seeds(
     return out
 
 
-def simulated_seeds(
+#: the swarm of ``seed_then_pso`` for a simulated cost: a few particles started around the
+#: seeds, moving on the scale of the candidate grid (docs/model.md, "Planning")
+LOCAL_SWARM = PSOOptions(
+    particles=8,
+    iterations=6,
+    init_spread=0.1,
+    velocity_clamp=0.03,
+    init_velocity=0.01,
+    patience=6,
+)
+
+
+def _check_counts(**values) -> dict[str, Any]:
+    """Validate ``name=(value, low, high)`` counts; None passes through."""
+    out = {}
+    for name, (value, low, high) in values.items():
+        out[name] = None if value is None else checks.count(name, value, low=low, high=high)
+    return out
+
+
+def _swarm_options(options, particles, iterations, simulated: bool) -> PSOOptions:
+    """The swarm settings: ``options`` (or the default for the cost) with ``particles`` /
+    ``iterations`` when given; a clash between them is an error."""
+    if options is not None and not isinstance(options, PSOOptions):
+        raise ValueError(
+            f"options: must be a PSOOptions (e.g. PSOOptions(**options)) or None, "
+            f"got {checks.describe(options)}"
+        )
+    base = options or (LOCAL_SWARM if simulated else PSOOptions())
+    for name, value in (("particles", particles), ("iterations", iterations)):
+        if value is not None and options is not None and getattr(options, name) != value:
+            raise ValueError(
+                f"{name}: {value} contradicts options.{name} = {getattr(options, name)}; "
+                "give one of them"
+            )
+    changes = {k: v for k, v in (("particles", particles), ("iterations", iterations)) if v}
+    return dataclasses.replace(base, **changes)
+
+
+def _search_options(search) -> SearchOptions:
+    if search is None:
+        return SearchOptions()
+    if isinstance(search, SearchOptions):
+        return search
+    if not isinstance(search, dict):
+        raise ValueError(
+            "search: must be a SearchOptions or a dict of its fields, "
+            f"got {checks.describe(search)}"
+        )
+    allowed = [f.name for f in dataclasses.fields(SearchOptions)]
+    checks.known_keys("search", search, allowed)
+    return SearchOptions(**search)
+
+
+def _substream(entropy: int, key: int) -> int:
+    return int(np.random.SeedSequence(entropy, spawn_key=(key,)).generate_state(1)[0])
+
+
+class _Clock:
+    """Seconds and cost evaluations per phase."""
+
+    def __init__(self):
+        self.t0 = self.last = time.perf_counter()
+        self.seconds: dict[str, float] = {}
+        self.nfev: dict[str, int] = {}
+
+    def lap(self, phase: str, nfev: int | None = None) -> None:
+        now = time.perf_counter()
+        self.seconds[phase] = self.seconds.get(phase, 0.0) + now - self.last
+        self.last = now
+        if nfev is not None:
+            self.nfev[phase] = int(nfev)
+
+    def timings(self) -> dict[str, float]:
+        return {**self.seconds, "total": time.perf_counter() - self.t0}
+
+
+def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes, entropy) -> str:
+    blob = json.dumps(
+        {
+            "room": room.to_dict(),
+            "M": M,
+            "search": dataclasses.asdict(opt),
+            "statistic": statistic,
+            "nodes": None if nodes is None else np.asarray(nodes).tolist(),
+            "seed": entropy,
+        },
+        sort_keys=True,
+    )
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def search_seeds(
     room: Room,
     M: int,
     *,
-    statistic: str = "variance",
-    sigma: float = 0.04,
-    nodes=None,
-    seed: int | None = None,
-    executor: Executor | None = None,
-    keep: int = SIMULATED_KEEP,
-    **search,
+    statistic: str,
+    options: SearchOptions,
+    nodes,
+    seed: int,
+    sigma: float,
+    executor: Executor | None,
+    workers: int,
+    checkpoint: Path | None = None,
+    progress: bool = False,
 ) -> tuple[list[SeedLayout], dict[str, Any]]:
-    """The simulation-driven "auto" seeds: the ``keep`` best local optima of
-    :func:`placement.simselect.simulated_select` (``search``: its keyword arguments), and
-    that search's summary (evaluations, table size, timings). A failure is logged and
-    gives no seeds."""
-    from placement.simselect import simulated_select
+    """The simulation-driven seeds: the ``options.keep`` best distinct optima of
+    :func:`placement.simselect.simulated_select`, and the search's summary. With a
+    ``checkpoint``, a finished search is saved beside it (``<checkpoint>.search.json``)
+    and reused by a rerun with the same arguments."""
+    from placement import simselect
 
-    nodes = room.grid() if nodes is None else nodes
-    try:
-        sel = simulated_select(
-            room, M, statistic=statistic, seed=seed, nodes=nodes, executor=executor, **search
-        )
-    except ValueError:  # bad arguments are the caller's to fix
-        raise
-    except Exception as exc:  # noqa: BLE001 - the bound-driven seeds remain
-        logger.warning("simulated seeds failed: %s", exc)
-        return [], {"message": f"{type(exc).__name__}: {exc}"}
-    out = [
-        SeedLayout(
-            f"simulated-{k + 1}",
-            a,
-            float(np.mean(peb(a, nodes, sigma))),
-            table_cost=c,
-        )
-        for k, (a, (_, c)) in enumerate(zip(sel.layouts(keep), sel.optima, strict=False))
-        if math.isfinite(c)
+    sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
+    print_ = _search_fingerprint(room, M, options, statistic, nodes, seed)
+    if sidecar is not None and sidecar.exists():
+        saved = _load_sidecar(sidecar)
+        if saved.get("fingerprint") == print_:
+            seeds = [
+                SeedLayout(
+                    d["name"], np.array(d["anchors"]), d["mean_peb"], table_cost=d["table_cost"]
+                )
+                for d in saved["seeds"]
+            ]
+            return seeds, {**saved["summary"], "resumed": True}
+    from placement.rangetable import range_table
+    from placement.simselect import new_points
+    from placement.surfaces import candidate_grid
+
+    bar = _Bar(progress, "range table")
+    table = range_table(
+        room,
+        new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
+        nodes,
+        draws=options.draws,
+        exact_draws=options.exact_draws,
+        mount_tolerance=options.mount_tolerance,
+        seed=seed,
+        executor=executor,
+        precision=options.precision,
+        progress=bar.update,
+    )
+    bar.close()
+    bar = _Bar(progress, "search")
+    sel = simselect.simulated_select(
+        room,
+        M,
+        statistic=statistic,
+        options=options,
+        table=table,
+        seed=seed,
+        executor=executor,
+        workers=workers,
+        progress=lambda stage, done, total: bar.update(done, total, stage),
+    )
+    bar.close()
+    grid = room.grid() if nodes is None else nodes
+    seeds = [
+        SeedLayout(f"search-{k + 1}", a, float(np.mean(peb(a, grid, sigma))), table_cost=c)
+        for k, (a, (_, c)) in enumerate(zip(sel.layouts(options.keep), sel.optima, strict=False))
     ]
     summary = sel.to_dict()
     del summary["anchors"], summary["optima"]
-    return out, summary
+    if sidecar is not None:
+        _write_sidecar(sidecar, print_, seeds, summary)
+    return seeds, summary
 
 
-def validate_layout(
-    room: Room, anchors, realizations: int, seed: int, sigma: float = 0.04, nodes=None
-) -> dict[str, Any]:
-    """σ, mean, P95, RMS of the simulated Euclidean error over ``realizations``, the mean
-    PEB (m, √tr J⁻¹ at constant ``sigma``), per-node RMSE and DOP, and the errors (R, P)."""
-    from simulation.evaluation import evaluate_layout
+class _Bar:
+    """A tqdm progress bar fed with (done, total) reports; silent when ``progress`` is
+    off."""
 
-    nodes = room.grid() if nodes is None else nodes
-    ev = evaluate_layout(room, anchors, realizations=realizations, seed=seed, nodes=nodes)
-    e = np.asarray(ev.errors)
-    return {
-        "realizations": int(realizations),
-        "seed": int(seed),
-        "std": float(np.std(e)),
-        "mean": float(np.mean(e)),
-        "p95": float(np.percentile(e, 95)),
-        "rms": float(np.sqrt(np.mean(e * e))),
-        "mean_peb": float(np.mean(peb(anchors, nodes, sigma))),
-        "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
-        "per_node": {"rmse": np.asarray(ev.rmse).tolist(), "dop": np.asarray(ev.dop).tolist()},
-        "errors": np.round(e, 6).tolist(),
-    }
+    def __init__(self, progress: bool, desc: str):
+        self.desc, self.bar = desc, None
+        self.enabled = progress
+
+    def update(self, done: int, total: int, stage: str | None = None) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, desc=self.desc, leave=False)
+        if stage is not None:
+            self.bar.set_description(f"{self.desc} ({stage})")
+        self.bar.total = total
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
-def _rescore(cost: SimulatedCost, anchors: np.ndarray, seed: int) -> float:
+def _load_sidecar(path: Path) -> dict:
+    afresh = "delete it to start afresh"
     try:
-        return float(cost(anchors, np.random.default_rng(seed)))
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"checkpoint {path}: cannot read it ({exc}); {afresh}") from None
+    if not isinstance(data, dict) or not {"fingerprint", "seeds", "summary"} <= set(data):
+        raise ValueError(f"checkpoint {path}: not a seed-search checkpoint; {afresh}")
+    return data
+
+
+def _write_sidecar(path: Path, fingerprint: str, seeds, summary) -> None:
+    blob = {"fingerprint": fingerprint, "seeds": [s.to_dict() for s in seeds], "summary": summary}
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(to_jsonable(blob)))
+    tmp.replace(path)
+
+
+def _score(cost, anchors) -> float:
+    try:
+        return float(cost(anchors))
     except Exception as exc:  # noqa: BLE001 - a failed re-score only drops that finalist
-        logger.warning("re-scoring a finalist failed: %s", exc)
+        logger.warning("scoring a finalist failed: %s", exc)
         return math.inf
 
 
-def rescore_finalists(
+def choose_finalist(
     res: PSOResult,
-    cost: SimulatedCost,
+    seeds: list[SeedLayout],
+    cost: DrawsCost,
     count: int,
-    realizations: int,
-    seed: int,
     executor: Executor | None = None,
+    progress=None,
 ) -> list[dict[str, Any]]:
-    """Re-score the ``count`` best distinct particle layouts (by PSO cost) with
-    ``realizations`` noise realizations each, all on the same noise draws (``seed``).
-
-    The swarm ranks layouts by single noisy evaluations, so its best is partly the
-    luckiest draw; a less noisy comparison on common draws picks the better layout.
-    Returns one dict per finalist (anchors, pso_cost, cost), in PSO-cost order.
-    """
-    order = np.argsort(res.pcost, kind="stable")
-    picked: list[int] = []
-    for i in order:
+    """Score the ``count`` best distinct particle layouts (by swarm cost) and every seed on
+    the fresh draws of ``cost``; returns one dict per finalist (``source``, ``anchors``,
+    ``pso_cost``, ``cost``), in swarm-cost order, seeds after the particles."""
+    picked: list[tuple[str, np.ndarray, float]] = []
+    for i in np.argsort(res.pcost, kind="stable"):
         if len(picked) == count or not math.isfinite(res.pcost[i]):
             break
-        if not any(np.allclose(res.pbest[i], res.pbest[j]) for j in picked):
-            picked.append(int(i))
-    scorer = dataclasses.replace(cost, realizations=int(realizations))
+        if not any(np.allclose(res.pbest[i], a) for _, a, _ in picked):
+            same = [s.name for s in seeds if np.allclose(s.anchors, res.pbest[i])]
+            source = same[0] if same else "swarm"
+            picked.append((source, res.pbest[i].copy(), float(res.pcost[i])))
+    for s in seeds:
+        if not any(np.allclose(s.anchors, a) for _, a, _ in picked):
+            picked.append((s.name, np.asarray(s.anchors), float(s.cost)))
     if executor is None:
-        values = [_rescore(scorer, res.pbest[i], seed) for i in picked]
+        pending = [_Later(_score, cost, a) for _, a, _ in picked]
     else:
-        futures = [executor.submit(_rescore, scorer, res.pbest[i], seed) for i in picked]
-        values = [f.result() for f in futures]
+        pending = [executor.submit(_score, cost, a) for _, a, _ in picked]
+    values = []
+    for fut in pending:
+        values.append(fut.result())
+        if progress:
+            progress(len(values), len(pending))
     return [
-        {"anchors": res.pbest[i].copy(), "pso_cost": float(res.pcost[i]), "cost": v}
-        for i, v in zip(picked, values, strict=True)
+        {"source": src, "anchors": a, "pso_cost": c, "cost": v}
+        for (src, a, c), v in zip(picked, values, strict=True)
     ]
+
+
+class _Later:
+    def __init__(self, fn, *args):
+        self.fn, self.args = fn, args
+
+    def result(self):
+        return self.fn(*self.args)
+
+
+def _degenerate(anchors) -> bool:
+    return checks.geometry(anchors) in ("collinear", "coincident")
 
 
 def seed_then_pso(
     room: Room | None = None,
     M: int = 8,
     *,
-    particles: int = 15,
-    iterations: int = 40,
     cost="variance",
-    realizations: int = 1,
     seeds="auto",
+    search: SearchOptions | dict | None = None,
+    options: PSOOptions | None = None,
+    particles: int | None = None,
+    iterations: int | None = None,
+    mount_tolerance: float = 0.03,
+    finalists: int = 4,
+    finalist_draws: int = 3,
+    validation: ValidationOptions | None = None,
+    validate_realizations: int | None = None,
+    realizations: int = 1,
     executor: Executor | None = None,
+    workers: int | None = None,
     seed: int | None = None,
     progress: bool = True,
     callback=None,
     checkpoint=None,
-    validate_realizations: int = 100,
-    options: PSOOptions | None = None,
     sigma: float = 0.04,
     nodes=None,
-    search: dict[str, Any] | None = None,
-    finalists: int = 4,
-    finalist_realizations: int = 10,
 ) -> PlacementResult:
-    """Plan M anchors: seeds → PSO on ``cost`` → finalists → validation.
+    """Plan M anchors: range-table search → swarm → finalists → validation (module doc).
 
-    cost : "variance" (paper), "mean", "p95", "rms" of the simulated Euclidean error with
-        ``realizations`` noise realizations per evaluation; "peb" (mean PEB); or a callable
-        ``f(anchors)`` / ``f(anchors, rng)``.
-    seeds : "auto" (for a simulated cost: the best layouts of a simulation-driven search
-        over candidate points, :func:`simulated_seeds`; then A-/D-optimal relaxations,
-        their refinements, best random layouts by PEB), None for an unseeded swarm, or an
-        array of seed layouts (S, M, 3).
-    executor : a ``concurrent.futures.Executor`` (``ProcessPoolExecutor``, or a Dask
-        ``Client.get_executor()``) for the particle evaluations.
-    seed : makes the whole run reproducible (same result serially or in parallel).
-    checkpoint : a file for the PSO state after every iteration; rerunning with the same
-        arguments resumes from it.
-    validate_realizations : noise realizations used to validate the best layout (0: skip).
-    options : further swarm settings; ``particles`` and ``iterations`` override its fields.
-    search : keyword arguments of the simulation-driven seed search
-        (:func:`placement.simselect.simulated_select`: ``spacing``, ``realizations``,
-        ``starts``, ...; ``{"starts": 0}`` skips it) and ``keep``, the optima kept as seeds.
-    finalists, finalist_realizations : for a simulated cost, the ``finalists`` best
-        distinct particle layouts are re-scored with ``finalist_realizations`` common
-        noise realizations and the lowest wins (:func:`rescore_finalists`); 1: the
-        swarm's best as it is. Validation then uses independent noise.
+    cost : "variance" (the paper's), "mean", "p95" or "rms" of the simulated Euclidean
+        error over the scene draws (:class:`placement.costs.DrawsCost`); "peb" (mean PEB
+        with constant ``sigma``); or a callable ``f(anchors)`` / ``f(anchors, rng)``.
+    seeds : "auto" (the search's optima for a simulated cost; relaxations and their
+        refinements otherwise), None (an unseeded swarm: random particles, the paper's
+        setting), or seed layouts (S, M, 3).
+    search : the search's settings (:class:`placement.simselect.SearchOptions` or a dict
+        of its fields); its ``draws`` and ``exact_draws`` also set the swarm's draws.
+    options, particles, iterations : the swarm's settings (default :data:`LOCAL_SWARM`
+        for a simulated cost, the paper's 15 × 40 otherwise); ``particles`` and
+        ``iterations`` set those fields, and must agree with ``options`` when both given.
+    mount_tolerance : radius (m) of the in-plane mounting error in the scored draws and in
+        the validation.
+    finalists, finalist_draws : how many of the swarm's best distinct layouts, together
+        with the seeds, are scored on ``finalist_draws`` fresh draws before choosing.
+    validation, validate_realizations : the validation's settings
+        (:class:`placement.validation.ValidationOptions`); ``validate_realizations`` sets
+        its ``realizations`` (0: no validation).
+    realizations : noise realizations per evaluation of a user's
+        :class:`placement.costs.SimulatedCost`-style cost (names use fixed draws instead).
+    executor, workers : a ``concurrent.futures.Executor`` and its number of workers (the
+        search splits its descents into that many jobs); results do not depend on them.
+    seed : makes the run reproducible (the same result serially or in parallel).
+    checkpoint : a file for the swarm's state after every iteration (the search's result
+        beside it); rerunning with the same arguments resumes.
     """
-    room = Room.techtile() if room is None else room
-    if int(M) != M or M < 4:
-        raise ValueError(f"M: need an integer number of anchors >= 4 for 3D positioning, got {M}")
-    for name, value in (("finalists", finalists), ("finalist_realizations", finalist_realizations)):
-        if int(value) != value or value < 1:
-            raise ValueError(f"{name}: must be an integer >= 1, got {value}")
-    if int(validate_realizations) != validate_realizations or validate_realizations < 0:
-        raise ValueError(
-            f"validate_realizations: must be an integer >= 0, got {validate_realizations}"
-        )
-    base = options or PSOOptions()
-    options = PSOOptions(
-        **{**base.__dict__, "particles": int(particles), "iterations": int(iterations)}
-    )
-    entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
-    cost_fn = make_cost(cost, room, realizations=realizations, nodes=nodes, sigma=sigma)
-    timings: dict[str, float] = {}
-    seed_search: dict[str, Any] = {}
-
-    t0 = time.perf_counter()
-    if isinstance(seeds, str):
-        if seeds != "auto":
-            raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
-        seed_layouts = []
-        search = dict(search or {})
-        if isinstance(cost_fn, SimulatedCost) and search.get("starts", 1) > 0:
-            seed_layouts, summary = simulated_seeds(
-                room,
-                M,
-                statistic=cost_fn.statistic,
-                sigma=sigma,
-                nodes=nodes,
-                seed=entropy,
-                executor=executor,
-                **search,
-            )
-            timings.update({f"seeding_{k}": v for k, v in summary.pop("timings", {}).items()})
-            seed_search = summary
-        seed_layouts += analytic_seeds(room, M, sigma=sigma, nodes=nodes, seed=entropy)
-    elif seeds is None:
-        seed_layouts = []
-    else:
-        arr = np.asarray(seeds, dtype=float).reshape(-1, M, 3)
-        seed_layouts = [
-            SeedLayout(
-                f"user-{i + 1}",
-                a,
-                float(np.mean(peb(a, room.grid() if nodes is None else nodes, sigma))),
-            )
-            for i, a in enumerate(arr)
-        ]
-    # Seeds take at most half of the swarm: the random half keeps exploring.
-    seed_layouts = seed_layouts[: max(0, options.particles // 2)]
-    timings["seeding"] = time.perf_counter() - t0
-
-    t1 = time.perf_counter()
-    initial = np.stack([s.anchors for s in seed_layouts]) if seed_layouts else None
-    res = pso(
-        cost_fn,
-        room,
-        M,
-        initial=initial,
-        options=options,
-        executor=executor,
-        seed=entropy,
-        progress=progress,
-        callback=callback,
-        checkpoint=checkpoint,
-        cost_label=cost_name(cost),
-    )
-    timings["pso"] = time.perf_counter() - t1
-    for i, s in enumerate(seed_layouts):
-        s.cost = float(res.costs[0][i])
-
-    t2 = time.perf_counter()
-    anchors, chosen_cost, final = res.anchors, res.cost, []
-    if finalists > 1 and isinstance(cost_fn, SimulatedCost) and res.success:
-        fseed = int(np.random.SeedSequence(entropy, spawn_key=(5,)).generate_state(1)[0])
-        final = rescore_finalists(
-            res, cost_fn, int(finalists), int(finalist_realizations), fseed, executor
-        )
-        best = min(final, key=lambda f: f["cost"])
-        if math.isfinite(best["cost"]):
-            anchors, chosen_cost = best["anchors"], best["pso_cost"]
-        timings["finalists"] = time.perf_counter() - t2
-
-    t3 = time.perf_counter()
-    validation: dict[str, Any] = {}
-    if validate_realizations > 0 and res.success:
-        vseed = int(np.random.SeedSequence(entropy, spawn_key=(4,)).generate_state(1)[0])
-        validation = validate_layout(
-            room, anchors, int(validate_realizations), vseed, sigma=sigma, nodes=nodes
-        )
-    timings["validation"] = time.perf_counter() - t3
-    timings["total"] = time.perf_counter() - t0
-
+    room = as_room(room)
+    run = _prepare(room, locals())
+    clock = _Clock()
+    seed_layouts, summary = _seeds(room, run, clock)
+    res = _run_swarm(room, run, seed_layouts, clock)
+    anchors, chosen, final = _choose(room, run, res, seed_layouts, clock)
+    validation = _validate(room, run, anchors, res.success, clock)
+    success = res.success and not _degenerate(anchors)
+    message = res.message if success else "no usable layout: " + res.message
     return PlacementResult(
         room=room,
         anchors=np.asarray(anchors),
-        cost=float(chosen_cost),
-        cost_name=cost_name(cost),
+        cost=float(chosen),
+        cost_name=run["label"],
         history=res.history,
         best_anchors_history=res.best_anchors_history,
         nfev=res.nfev,
         nit=res.nit,
-        message=res.message,
-        success=res.success,
+        message=message,
+        success=success,
         seeds=seed_layouts,
         validation=validation,
-        timings=timings,
-        settings={
-            "M": int(M),
-            "particles": options.particles,
-            "iterations": options.iterations,
-            "cost": cost_name(cost),
-            "realizations": int(realizations),
-            "seeds": "auto" if isinstance(seeds, str) else ("none" if seeds is None else "user"),
-            "seed_search": seed_search,
-            "seed": entropy,
-            "validate_realizations": int(validate_realizations),
-            "finalists": int(finalists),
-            "finalist_realizations": int(finalist_realizations),
-            "sigma": sigma,
-            "options": dict(options.__dict__),
-        },
+        timings=clock.timings(),
+        settings=_settings(run, summary, clock),
         pso=res,
         finalists=final,
     )
+
+
+def _prepare(room: Room, kw: dict) -> dict[str, Any]:
+    """Check every argument before any work; returns the run's resolved settings."""
+    M = checks.count("M", kw["M"], low=4, high=100)
+    counts = _check_counts(
+        particles=(kw["particles"], 2, 10_000),
+        iterations=(kw["iterations"], 1, 100_000),
+        finalists=(kw["finalists"], 1, 1000),
+        finalist_draws=(kw["finalist_draws"], 1, 1000),
+        validate_realizations=(kw["validate_realizations"], 0, 100_000),
+        realizations=(kw["realizations"], 1, 10_000),
+        workers=(kw["workers"], 1, 1024),
+    )
+    sigma = checks.real("sigma", kw["sigma"], low=0.0, high=10.0, low_open=True, unit="m")
+    tol = checks.real("mount_tolerance", kw["mount_tolerance"], low=0.0, high=1.0, unit="m")
+    seed = checks.seed("seed", kw["seed"])
+    entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
+    search = _search_options(kw["search"])
+    cost = kw["cost"]
+    cost_fn = make_cost(
+        cost, room, realizations=counts["realizations"], nodes=kw["nodes"], sigma=sigma
+    )
+    simulated = isinstance(cost, str) and cost in ("variance", "mean", "p95", "rms")
+    swarm = _swarm_options(kw["options"], counts["particles"], counts["iterations"], simulated)
+    validation = kw["validation"] or ValidationOptions()
+    if not isinstance(validation, ValidationOptions):
+        raise ValueError(
+            f"validation: must be a ValidationOptions or None, got {checks.describe(validation)}"
+        )
+    if counts["validate_realizations"] is not None:
+        validation = dataclasses.replace(validation, realizations=counts["validate_realizations"])
+    seeds = kw["seeds"]
+    if isinstance(seeds, str) and seeds != "auto":
+        raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
+    nodes = None if kw["nodes"] is None else checks.points("nodes", kw["nodes"])
+    checkpoint = kw["checkpoint"]
+    return {
+        "M": M,
+        "cost": cost,
+        "cost_fn": cost_fn,
+        "label": cost_name(cost),
+        "simulated": simulated,
+        "search": search,
+        "swarm": swarm,
+        "validation": validation,
+        "seeds": seeds,
+        "sigma": sigma,
+        "mount_tolerance": tol,
+        "entropy": entropy,
+        "nodes": nodes,
+        "finalists": counts["finalists"],
+        "finalist_draws": counts["finalist_draws"],
+        "executor": kw["executor"],
+        "workers": counts["workers"] or _workers(kw["executor"]),
+        "progress": checks.flag("progress", kw["progress"]),
+        "callback": kw["callback"],
+        "checkpoint": None if checkpoint is None else checks.output_path("checkpoint", checkpoint),
+        "realizations": counts["realizations"],
+    }
+
+
+def _workers(executor) -> int:
+    if executor is None:
+        return 1
+    n = getattr(executor, "_max_workers", None)
+    return int(n) if n else 2
+
+
+def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: int, nodes_key: int):
+    """A :class:`DrawsCost` of the run's statistic over ``draws`` scene draws."""
+    grid = room.grid() if run["nodes"] is None else run["nodes"]
+    sets = node_draws(room, grid, draws, exact, _substream(run["entropy"], nodes_key))
+    return DrawsCost(
+        room,
+        sets,
+        exact_draws=exact,
+        mount_tolerance=run["mount_tolerance"],
+        seed=_substream(run["entropy"], key),
+        statistic=run["cost"],
+        precision=run["search"].precision,
+    )
+
+
+def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict]:
+    """The seed layouts of the run and the search's summary."""
+    M, seeds, summary = run["M"], run["seeds"], {}
+    out: list[SeedLayout] = []
+    if isinstance(seeds, str) and run["simulated"]:
+        out, summary = search_seeds(
+            room,
+            M,
+            statistic=run["cost"],
+            options=run["search"],
+            nodes=run["nodes"],
+            seed=_substream(run["entropy"], 1),
+            sigma=run["sigma"],
+            executor=run["executor"],
+            workers=run["workers"],
+            checkpoint=run["checkpoint"],
+            progress=run["progress"],
+        )
+        clock.lap("search", summary.get("nfev"))
+    elif isinstance(seeds, str):
+        out = analytic_seeds(room, M, sigma=run["sigma"], nodes=run["nodes"], seed=run["entropy"])
+        clock.lap("seeding")
+    elif seeds is not None:
+        grid = room.grid() if run["nodes"] is None else run["nodes"]
+        arr = checks.reals("seeds", seeds)
+        if arr.size % (3 * M) or arr.shape[-1] != 3:
+            raise ValueError(f"seeds: expected layouts of shape (S, {M}, 3), got {arr.shape}")
+        for i, a in enumerate(arr.reshape(-1, M, 3)):
+            out.append(SeedLayout(f"user-{i + 1}", a, float(np.mean(peb(a, grid, run["sigma"])))))
+    return out[: run["swarm"].particles], summary
+
+
+def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
+    """The swarm on the run's cost: the search's draws (common random numbers) for a
+    simulated cost, seeded with ``seed_layouts``."""
+    s = run["search"]
+    cost = run["cost_fn"]
+    if run["simulated"]:
+        cost = _draws_cost(room, run, s.draws, s.exact_draws, key=2, nodes_key=1)
+        run["swarm_cost"] = cost
+    initial = np.stack([x.anchors for x in seed_layouts]) if seed_layouts else None
+    res = pso(
+        cost,
+        room,
+        run["M"],
+        initial=initial,
+        options=run["swarm"],
+        executor=run["executor"],
+        seed=run["entropy"],
+        progress=run["progress"],
+        callback=run["callback"],
+        checkpoint=run["checkpoint"],
+        cost_label=run["label"],
+    )
+    for i, x in enumerate(seed_layouts):
+        x.cost = float(res.costs[0][i])
+    clock.lap("pso", res.nfev)
+    return res
+
+
+def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, clock: _Clock):
+    """The chosen layout, its swarm cost, and the finalists (fresh draws, simulated
+    costs only); a degenerate layout is never chosen."""
+    anchors, chosen, final = res.anchors, res.cost, []
+    if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts):
+        fresh = _draws_cost(room, run, run["finalist_draws"], 1, key=5, nodes_key=6)
+        bar = _Bar(run["progress"], "finalists")
+        final = choose_finalist(
+            res, seed_layouts, fresh, run["finalists"], run["executor"], bar.update
+        )
+        bar.close()
+        usable = [f for f in final if math.isfinite(f["cost"]) and not _degenerate(f["anchors"])]
+        if usable:
+            best = min(usable, key=lambda f: f["cost"])
+            anchors, chosen = best["anchors"], best["pso_cost"]
+        clock.lap("finalists", len(final) * run["finalist_draws"])
+    return anchors, chosen, final
+
+
+def _validate(room: Room, run: dict, anchors, success: bool, clock: _Clock) -> dict:
+    out: dict[str, Any] = {}
+    if success and run["validation"].realizations > 0:
+        bar = _Bar(run["progress"], "validation")
+        out = validate_layout(
+            room,
+            anchors,
+            seed=_substream(run["entropy"], 4),
+            options=run["validation"],
+            mount_tolerance=run["mount_tolerance"],
+            nodes=run["nodes"],
+            sigma=run["sigma"],
+            executor=run["executor"],
+            progress=bar.update,
+        )
+        bar.close()
+    clock.lap("validation")
+    return out
+
+
+def _settings(run: dict, summary: dict, clock: _Clock) -> dict[str, Any]:
+    return {
+        "M": run["M"],
+        "cost": run["label"],
+        "seeds": "auto"
+        if isinstance(run["seeds"], str)
+        else ("none" if run["seeds"] is None else "user"),
+        "seed": run["entropy"],
+        "search": dataclasses.asdict(run["search"]),
+        "seed_search": summary,
+        "swarm": dataclasses.asdict(run["swarm"]),
+        "particles": run["swarm"].particles,
+        "iterations": run["swarm"].iterations,
+        "mount_tolerance": run["mount_tolerance"],
+        "finalists": run["finalists"],
+        "finalist_draws": run["finalist_draws"],
+        "validation": dataclasses.asdict(run["validation"]),
+        "validate_realizations": run["validation"].realizations,
+        "sigma": run["sigma"],
+        "nfev_by_phase": dict(clock.nfev),
+    }

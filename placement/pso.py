@@ -90,6 +90,9 @@ class PSOOptions:
 
     velocity_clamp : max |v| per coordinate as a fraction of the room size on that axis.
     init_velocity : initial velocities are U(−1, 1) × this fraction of the room size.
+    init_spread : 0 (paper): the particles besides the seed layouts start at random
+        layouts; > 0: they start around the seeds, every coordinate moved by a normal
+        offset of this standard deviation (m) (:func:`initial_positions`).
     tol, patience : stop when the best cost improved by less than ``tol`` (relative) over
         the last ``patience`` iterations (paper: "improvement per iteration stays under a
         threshold"); ``tol = 0`` runs all iterations. The single-realization cost is
@@ -109,6 +112,7 @@ class PSOOptions:
     init_velocity: float = 0.1
     tol: float = 1e-3
     patience: int = 20
+    init_spread: float = 0.0
 
     def __post_init__(self) -> None:
         checks.count("particles", self.particles, low=2, high=MAX_PARTICLES)
@@ -118,6 +122,7 @@ class PSOOptions:
             checks.real(name, getattr(self, name), low=0.0, high=high)
         checks.real("velocity_clamp", self.velocity_clamp, low=0.0, high=1.0, low_open=True)
         checks.count("patience", self.patience, low=1)
+        checks.real("init_spread", self.init_spread, low=0.0, unit="m")
 
 
 @dataclass
@@ -438,6 +443,177 @@ def _write_atomic(path: Path, state: dict) -> None:
     os.replace(tmp, path)
 
 
+@dataclass
+class _Swarm:
+    """The swarm's state between iterations: positions x and velocities v (K, M, 3), each
+    particle's best pbest (K, M, 3) and its cost pcost (K,), the best gbest and gcost, and
+    the run's record. Saved to and restored from a checkpoint as a plain dictionary."""
+
+    seed: int
+    iteration: int
+    x: np.ndarray
+    v: np.ndarray
+    pbest: np.ndarray
+    pcost: np.ndarray
+    gbest: np.ndarray
+    gcost: float
+    rng: np.random.Generator
+    history: list[float]
+    best_anchors_history: list[list]
+    costs: list[list[float]]
+    nfev: int
+    failures: int
+    counts: dict[str, int]
+    stopped: str | None = None
+    elapsed: float = 0.0
+
+    @classmethod
+    def start(cls, seed: int, x, v, costs, failures: int, counts: dict) -> _Swarm:
+        best = int(np.argmin(costs))
+        return cls(
+            seed=seed,
+            iteration=0,
+            x=x,
+            v=v,
+            pbest=x.copy(),
+            pcost=costs.copy(),
+            gbest=x[best].copy(),
+            gcost=float(costs[best]),
+            rng=_stream(seed, 0),
+            history=[float(costs[best])],
+            best_anchors_history=[x[best].tolist()],
+            costs=[costs.tolist()],
+            nfev=len(x),
+            failures=failures,
+            counts=counts,
+        )
+
+    def to_state(self, fingerprint: str) -> dict:
+        """The checkpoint dictionary (JSON-ready)."""
+        return {
+            "version": CHECKPOINT_VERSION,
+            "fingerprint": fingerprint,
+            "seed": self.seed,
+            "iteration": self.iteration,
+            "x": self.x.tolist(),
+            "v": self.v.tolist(),
+            "pbest": self.pbest.tolist(),
+            "pcost": self.pcost.tolist(),
+            "gbest": self.gbest.tolist(),
+            "gcost": self.gcost,
+            "history": self.history,
+            "best_anchors_history": self.best_anchors_history,
+            "costs": self.costs,
+            "nfev": self.nfev,
+            "failures": self.failures,
+            "rng": self.rng.bit_generator.state,
+            "stopped": self.stopped,
+            "elapsed": self.elapsed,
+            **self.counts,
+        }
+
+    @classmethod
+    def from_state(cls, state: dict) -> _Swarm:
+        rng = np.random.Generator(np.random.PCG64())
+        rng.bit_generator.state = state["rng"]
+        return cls(
+            seed=int(state["seed"]),
+            iteration=int(state["iteration"]),
+            x=np.array(state["x"]),
+            v=np.array(state["v"]),
+            pbest=np.array(state["pbest"]),
+            pcost=np.array(state["pcost"], dtype=float),
+            gbest=np.array(state["gbest"]),
+            gcost=float(state["gcost"]),
+            rng=rng,
+            history=list(state["history"]),
+            best_anchors_history=list(state["best_anchors_history"]),
+            costs=list(state["costs"]),
+            nfev=int(state["nfev"]),
+            failures=int(state["failures"]),
+            counts={k: int(state.get(k, 0)) for k in ("lost", "timeouts")},
+            stopped=state["stopped"],
+            elapsed=float(state["elapsed"]),
+        )
+
+    def move(self, room: Room, options: PSOOptions, vmax: np.ndarray) -> None:
+        """One velocity and position update (paper eqs. (1)–(2)), projected onto the
+        allowed mounting surfaces."""
+        r1 = self.rng.random(self.x.shape)
+        r2 = self.rng.random(self.x.shape)
+        v = (
+            options.inertia * self.v
+            + options.cognitive * r1 * (self.pbest - self.x)
+            + options.social * r2 * (self.gbest - self.x)
+        )
+        self.v = np.clip(v, -vmax, vmax)
+        self.x = project(room, self.x + self.v)
+
+    def record(self, costs: np.ndarray, failures: int, options: PSOOptions) -> None:
+        """Update the bests with the costs (K,) of the current positions, and the record."""
+        better = costs < self.pcost
+        self.pbest[better], self.pcost[better] = self.x[better], costs[better]
+        i = int(np.argmin(self.pcost))
+        if self.pcost[i] < self.gcost:
+            self.gbest, self.gcost = self.pbest[i].copy(), float(self.pcost[i])
+        self.iteration += 1
+        self.history.append(self.gcost)
+        self.best_anchors_history.append(self.gbest.tolist())
+        self.costs.append(costs.tolist())
+        self.nfev += len(costs)
+        self.failures += failures
+        self.stopped = _stall(self.history, options)
+
+    def result(self, message: str, success: bool, elapsed: float, resumed_from) -> PSOResult:
+        return PSOResult(
+            anchors=self.gbest.copy(),
+            cost=self.gcost,
+            nit=self.iteration + 1,
+            nfev=self.nfev,
+            message=message,
+            success=success,
+            history=list(self.history),
+            best_anchors_history=[np.array(a) for a in self.best_anchors_history],
+            costs=np.array(self.costs),
+            seed=self.seed,
+            elapsed=elapsed,
+            failures=self.failures,
+            pbest=self.pbest.copy(),
+            pcost=self.pcost.copy(),
+            extra={**self.counts, "resumed_from": resumed_from},
+        )
+
+
+def _stall(history: list[float], options: PSOOptions) -> str | None:
+    """The stopping message when the best cost improved by less than ``tol`` (relative)
+    over the last ``patience`` iterations, else None."""
+    t, P = len(history) - 1, options.patience
+    if options.tol <= 0 or t < P:
+        return None
+    ref, now = history[t - P], history[t]
+    if math.isfinite(ref) and ref - now <= options.tol * abs(ref):
+        return f"best cost improved by less than {options.tol:g} (relative) in {P} iterations"
+    return None
+
+
+def initial_positions(
+    room: Room, M: int, initial, options: PSOOptions, rng: np.random.Generator
+) -> np.ndarray:
+    """(K, M, 3) the swarm's first positions: the seed layouts ``initial`` (S, M, 3) first,
+    then random area-proportional layouts, or, with ``options.init_spread`` > 0 and
+    seeds given, the seeds in turn with every coordinate moved by N(0, init_spread²) m,
+    projected onto the mounting surfaces (a swarm that works around its seeds)."""
+    K = options.particles
+    x = np.stack([random_layout(room, M, rng) for _ in range(K)])
+    S = 0 if initial is None else len(initial)
+    if S:
+        x[:S] = project(room, initial)
+        if options.init_spread > 0:
+            parents = x[np.arange(K - S) % S]
+            x[S:] = project(room, parents + rng.normal(0.0, options.init_spread, parents.shape))
+    return x
+
+
 def pso(
     cost: Callable[[np.ndarray, np.random.Generator], float],
     room: Room,
@@ -522,152 +698,61 @@ def pso(
     if checkpoint is not None:
         ckpt = checks.output_path("checkpoint", checkpoint)
 
-    state = None
-    resumed_from = None
-    saved = None if ckpt is None else load_checkpoint(ckpt)
-    if saved is not None:
-        if saved.get("version") == CHECKPOINT_VERSION and saved.get("fingerprint") == fingerprint:
-            state = saved
-            resumed_from = int(saved["iteration"])
-            logger.info("resuming from %s at iteration %d", ckpt, saved["iteration"])
-        else:
-            logger.warning("checkpoint %s was written by a different run; starting afresh", ckpt)
-    counts = {"lost": 0, "timeouts": 0}
-    if state is not None:
-        counts = {k: int(state.get(k, 0)) for k in counts}
-
+    swarm, resumed_from = _resume(ckpt, fingerprint)
     t0 = time.perf_counter()
-    size = np.array(room.size)
-    vmax = options.velocity_clamp * size
-    if state is None:
+    if swarm is None:
         entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
         init_rng = _stream(entropy, 2)
-        x = np.stack([random_layout(room, M, init_rng) for _ in range(K)])
-        if initial is not None and len(initial):
-            x[: len(initial)] = project(room, initial)
-        v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * size
+        x = initial_positions(room, M, initial, options, init_rng)
+        v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * np.array(room.size)
+        counts = {"lost": 0, "timeouts": 0}
         costs, failures = evaluate_swarm(
             cost, x, entropy, 0, executor, chunksize, eval_timeout=eval_timeout, counts=counts
         )
-        best = int(np.argmin(costs))
-        state = {
-            "version": CHECKPOINT_VERSION,
-            "fingerprint": fingerprint,
-            "seed": entropy,
-            "iteration": 0,
-            "x": x.tolist(),
-            "v": v.tolist(),
-            "pbest": x.tolist(),
-            "pcost": costs.tolist(),
-            "gbest": x[best].tolist(),
-            "gcost": float(costs[best]),
-            "history": [float(costs[best])],
-            "best_anchors_history": [x[best].tolist()],
-            "costs": [costs.tolist()],
-            "nfev": K,
-            "failures": failures,
-            "rng": _stream(entropy, 0).bit_generator.state,
-            "stopped": None,
-            "elapsed": 0.0,
-            **counts,
-        }
+        swarm = _Swarm.start(entropy, x, v, costs, failures, counts)
         if ckpt is not None:
-            _write_atomic(ckpt, state)
-
-    entropy = int(state["seed"])
-    rng = np.random.Generator(np.random.PCG64())
-    rng.bit_generator.state = state["rng"]
-    x, v = np.array(state["x"]), np.array(state["v"])
-    pbest, pcost = np.array(state["pbest"]), np.array(state["pcost"], dtype=float)
-    gbest, gcost = np.array(state["gbest"]), float(state["gcost"])
-    elapsed0 = float(state["elapsed"])
-
+            _write_atomic(ckpt, swarm.to_state(fingerprint))
+    elapsed0 = swarm.elapsed
+    vmax = options.velocity_clamp * np.array(room.size)
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=T, initial=state["iteration"] + 1, desc="PSO", unit="it", leave=False)
+        bar = tqdm(total=T, initial=swarm.iteration + 1, desc="PSO", unit="it", leave=False)
 
-    def snapshot(message: str, success: bool) -> PSOResult:
-        return PSOResult(
-            anchors=gbest.copy(),
-            cost=gcost,
-            nit=state["iteration"] + 1,
-            nfev=state["nfev"],
-            message=message,
-            success=success,
-            history=list(state["history"]),
-            best_anchors_history=[np.array(a) for a in state["best_anchors_history"]],
-            costs=np.array(state["costs"]),
-            seed=entropy,
-            elapsed=elapsed0 + time.perf_counter() - t0,
-            failures=state["failures"],
-            pbest=pbest.copy(),
-            pcost=pcost.copy(),
-            extra={**counts, "resumed_from": resumed_from},
-        )
+    def elapsed() -> float:
+        return elapsed0 + time.perf_counter() - t0
 
-    message = state["stopped"] or f"reached the maximum number of iterations ({T})"
+    message = swarm.stopped or f"reached the maximum number of iterations ({T})"
     try:
-        while state["stopped"] is None and state["iteration"] + 1 < T:
-            t = state["iteration"] + 1
-            r1 = rng.random(x.shape)
-            r2 = rng.random(x.shape)
-            v = (
-                options.inertia * v
-                + options.cognitive * r1 * (pbest - x)
-                + options.social * r2 * (gbest - x)
-            )
-            v = np.clip(v, -vmax, vmax)
-            x = project(room, x + v)
+        while swarm.stopped is None and swarm.iteration + 1 < T:
+            swarm.move(room, options, vmax)
             costs, failures = evaluate_swarm(
-                cost, x, entropy, t, executor, chunksize, eval_timeout=eval_timeout, counts=counts
+                cost,
+                swarm.x,
+                swarm.seed,
+                swarm.iteration + 1,
+                executor,
+                chunksize,
+                eval_timeout=eval_timeout,
+                counts=swarm.counts,
             )
-            better = costs < pcost
-            pbest[better], pcost[better] = x[better], costs[better]
-            i = int(np.argmin(pcost))
-            if pcost[i] < gcost:
-                gbest, gcost = pbest[i].copy(), float(pcost[i])
-            history = state["history"] + [gcost]
-            stop = None
-            P = options.patience
-            if options.tol > 0 and t >= P:
-                ref = history[t - P]
-                if math.isfinite(ref) and ref - gcost <= options.tol * abs(ref):
-                    stop = (
-                        f"best cost improved by less than {options.tol:g} (relative) "
-                        f"in {P} iterations"
-                    )
-            state.update(
-                iteration=t,
-                x=x.tolist(),
-                v=v.tolist(),
-                pbest=pbest.tolist(),
-                pcost=pcost.tolist(),
-                gbest=gbest.tolist(),
-                gcost=gcost,
-                history=history,
-                best_anchors_history=state["best_anchors_history"] + [gbest.tolist()],
-                costs=state["costs"] + [costs.tolist()],
-                nfev=state["nfev"] + K,
-                failures=state["failures"] + failures,
-                rng=rng.bit_generator.state,
-                stopped=stop,
-                elapsed=elapsed0 + time.perf_counter() - t0,
-                **counts,
-            )
-            if callback is not None and callback(snapshot("running", True)):
-                state["stopped"] = "stopped by callback"
+            swarm.record(costs, failures, options)
+            swarm.elapsed = elapsed()
+            if callback is not None and callback(
+                swarm.result("running", True, elapsed(), resumed_from)
+            ):
+                swarm.stopped = "stopped by callback"
             if ckpt is not None:
-                _write_atomic(ckpt, state)
+                _write_atomic(ckpt, swarm.to_state(fingerprint))
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix(best=f"{gcost:.4g}")
-            if state["stopped"]:
-                message = state["stopped"]
+                bar.set_postfix(best=f"{swarm.gcost:.4g}")
+            if swarm.stopped:
+                message = swarm.stopped
     except ExecutorBroken as exc:
         where = (
-            f"checkpoint {ckpt} holds iteration {state['iteration']}: rerun to resume"
+            f"checkpoint {ckpt} holds iteration {swarm.iteration}: rerun to resume"
             if ckpt is not None
             else "pass a checkpoint to be able to resume"
         )
@@ -675,7 +760,19 @@ def pso(
     finally:
         if bar is not None:
             bar.close()
-    success = math.isfinite(gcost)
+    success = math.isfinite(swarm.gcost)
     if not success:
         message = "no particle could be evaluated (every cost was inf); " + message
-    return snapshot(message, success)
+    return swarm.result(message, success, elapsed(), resumed_from)
+
+
+def _resume(ckpt: Path | None, fingerprint: str) -> tuple[_Swarm | None, int | None]:
+    """The swarm saved in ``ckpt`` by a run with the same fingerprint, and its iteration."""
+    saved = None if ckpt is None else load_checkpoint(ckpt)
+    if saved is None:
+        return None, None
+    if saved.get("version") == CHECKPOINT_VERSION and saved.get("fingerprint") == fingerprint:
+        logger.info("resuming from %s at iteration %d", ckpt, saved["iteration"])
+        return _Swarm.from_state(saved), int(saved["iteration"])
+    logger.warning("checkpoint %s was written by a different run; starting afresh", ckpt)
+    return None, None

@@ -1,24 +1,30 @@
 """Simulation-driven selection of M anchors among candidate mounting points.
 
-Anchors transmit one at a time (TDM, paper §II) and each anchor's noise level is set by its
-own closest grid node, so the range a node measures from an anchor depends on that
-anchor, that node and the noise only, not on the other anchors. Simulating every
-candidate point against every node once, for a few noise realizations (the *range
-table*), therefore gives the exact simulated ranges of every layout built from the
-candidates, and scoring such a layout costs only the least-squares positioning (all
-swaps of one anchor are positioned in one batch). A local search on the table (swap one
-anchor for one of the 25 nearest unused candidates while the cost falls; with the 10
-nearest it stalls in poor local optima) finds layouts that score well in the full
-simulation, which the bound-driven selections do not (BENCHMARKS.md): they are the
-first seeds of :func:`placement.seed_then_pso`.
+A layout built from candidate points is scored on a range table
+(:mod:`placement.rangetable`) by least-squares positioning alone: the simulated ranges
+are already in the table, so a layout costs a batch of position fixes, not a
+simulation. The search (docs/model.md, "Range-table search"):
 
-The table's noise is fixed (common random numbers), so the search compares layouts on
-the same draws; the swarm then re-scores its seeds with fresh noise.
+1. **Stochastic swap search.** From the best of a few random layouts, one anchor at a
+   time: a random sample of ``batch`` of its ``neighbours`` nearest unused candidates is
+   scored in one batch and the best swap is taken if it lowers the cost. After
+   ``patience`` samples in a row without a gain, the best layout so far is kicked (two
+   anchors moved to random neighbours) and the search goes on from there, until its
+   evaluation budget is spent. Several such chains run from different starts.
+2. **Descent.** Each chain's best layout is finished by a best-improvement descent over
+   the full neighbourhood, so every returned layout is a local optimum: no single swap
+   of an anchor with one of its ``neighbours`` nearest candidates lowers its cost.
+3. **Multi-resolution** (optional). The best distinct optima get table columns for finer
+   candidate points around each of their anchors (:func:`placement.rangetable.extend_table`)
+   and descend again on the grown table, resolving them to the fine spacing without
+   simulating a fine grid over whole surfaces.
+
+Every random choice comes from streams derived from ``seed`` and the chain's number;
+results do not depend on the executor or the number of workers.
 """
 
 from __future__ import annotations
 
-import logging
 import math
 import time
 from concurrent.futures import Executor
@@ -27,172 +33,398 @@ from typing import Any
 
 import numpy as np
 
-from placement.costs import SIMULATED_STATISTICS
-from placement.surfaces import candidate_grid
+from placement.rangetable import RangeTable, extend_table, range_table, table_costs
+from placement.surfaces import candidate_grid, mounting_surfaces, project, surface_index
+from simulation import checks
 from simulation.room import Room
 
-logger = logging.getLogger(__name__)
+
+def nearest(points: np.ndarray, k: int) -> np.ndarray:
+    """(N, k') indices of the k' = min(k, N − 1) nearest other points of each point."""
+    d = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    return np.argsort(d, axis=1, kind="stable")[:, 1 : min(int(k), len(points) - 1) + 1]
+
+
+class _Scorer:
+    """Counts the layouts it scores and stops at a budget."""
+
+    def __init__(self, table: RangeTable, statistic: str, budget: int):
+        self.table, self.statistic, self.budget, self.nfev = table, statistic, budget, 0
+
+    @property
+    def left(self) -> int:
+        return self.budget - self.nfev
+
+    def __call__(self, layouts) -> np.ndarray:
+        self.nfev += len(layouts)
+        return table_costs(self.table, np.stack(layouts), self.statistic)
+
+
+def descend(S, f: float, nbr: np.ndarray, score: _Scorer, rng: np.random.Generator):
+    """Best-improvement swap descent from layout S (M,) of cost f over the neighbourhoods
+    ``nbr`` (N, k); returns (S, f, local), ``local`` True when no single swap of an anchor
+    with one of its k neighbours improves S (False when the budget ran out first)."""
+    S = np.asarray(S, dtype=int).copy()
+    M = len(S)
+    stale = 0  # anchors tried in a row without an improvement
+    order = rng.permutation(M)
+    i = 0
+    while stale < M:
+        if score.left <= 0:
+            return S, f, False
+        a = order[i % M]
+        i += 1
+        js = [j for j in nbr[S[a]] if j not in S][: score.left]
+        if not js:
+            stale += 1
+            continue
+        swaps = [np.where(np.arange(M) == a, j, S) for j in js]
+        g = score(swaps)
+        b = int(np.argmin(g))
+        if g[b] < f:
+            S, f, stale = swaps[b], float(g[b]), 1
+        else:
+            stale += 1
+    return S, f, True
+
+
+def kick(S: np.ndarray, nbr: np.ndarray, rng: np.random.Generator, moves: int = 2):
+    """S with ``moves`` random anchors moved to random unused neighbours of theirs."""
+    T = np.array(S, copy=True)
+    for a in rng.choice(len(S), size=min(moves, len(S)), replace=False):
+        free = [j for j in nbr[T[a]] if j not in T]
+        if free:
+            T[a] = free[int(rng.integers(len(free)))]
+    return T
+
+
+@dataclass
+class Chain:
+    """One stochastic swap search with kicks (module docstring, step 1), resumable: the
+    driver advances it in segments (for progress) with the same result as in one go.
+
+    S, f the current layout and cost; best, fbest the best so far; fails the steps since
+    the last gain; step the steps taken; nfev the layouts scored; rng its own stream.
+    """
+
+    S: np.ndarray
+    f: float
+    best: np.ndarray
+    fbest: float
+    rng: np.random.Generator
+    order: np.ndarray
+    fails: int = 0
+    step: int = 0
+    nfev: int = 0
+
+    @classmethod
+    def start(cls, table, M: int, statistic: str, tries: int, rng) -> Chain:
+        """The best of ``tries`` random layouts of M candidates."""
+        N = len(table.candidates)
+        layouts = [rng.choice(N, M, replace=False) for _ in range(tries)]
+        costs = table_costs(table, np.stack(layouts), statistic)
+        k = int(np.argmin(costs))
+        S = np.asarray(layouts[k])
+        chain = cls(S, float(costs[k]), S.copy(), float(costs[k]), rng, rng.permutation(M))
+        chain.nfev = tries
+        return chain
+
+    def advance(self, table, statistic, nbr, *, batch, patience, until, budget, moves=2):
+        """Take steps while fewer than ``until`` layouts were scored; never score more
+        than ``budget`` in all. Returns self."""
+        M = len(self.S)
+        while self.nfev < min(until, budget):
+            a = self.order[self.step % M]
+            self.step += 1
+            pool = [j for j in nbr[self.S[a]] if j not in self.S]
+            size = min(batch, len(pool), budget - self.nfev)
+            js = self.rng.choice(pool, size=size, replace=False)
+            swaps = np.stack([np.where(np.arange(M) == a, j, self.S) for j in js])
+            g = table_costs(table, swaps, statistic)
+            self.nfev += len(swaps)
+            b = int(np.argmin(g))
+            if g[b] < self.f:
+                self.S, self.f, self.fails = swaps[b], float(g[b]), 0
+                if self.f < self.fbest:
+                    self.best, self.fbest = self.S.copy(), self.f
+            else:
+                self.fails += 1
+            if self.fails >= patience and self.nfev < budget:
+                self.S = kick(self.best, nbr, self.rng, moves)
+                self.f = float(table_costs(table, self.S[None], statistic)[0])
+                self.nfev += 1
+                self.fails = 0
+        return self
+
+
+def fine_points(room: Room, anchors: np.ndarray, spacing: float, steps: int) -> np.ndarray:
+    """(n, 3) points around each anchor (M, 3) in its surface plane: the lattice of
+    ``spacing`` (m) with up to ``steps`` steps along each in-plane axis, projected onto
+    the mounting surfaces."""
+    surfs = mounting_surfaces(room)
+    offs = np.arange(-steps, steps + 1) * spacing
+    du, dv = np.meshgrid(offs, offs, indexing="ij")
+    out = []
+    for a, s in zip(anchors, surface_index(room, anchors), strict=True):
+        uv = surfs[int(s)].uv_axes if s >= 0 else (0, 1)
+        p = np.repeat(a[None], du.size, axis=0)
+        p[:, uv[0]] += du.ravel()
+        p[:, uv[1]] += dv.ravel()
+        out.append(project(room, p))
+    return np.concatenate(out)
+
+
+def new_points(existing: np.ndarray, points: np.ndarray, tol: float = 1e-3) -> np.ndarray:
+    """The points (n, 3) farther than ``tol`` (m) from every existing point and from each
+    other (first kept)."""
+    keep: list[np.ndarray] = []
+    base = np.asarray(existing, dtype=float).reshape(-1, 3)
+    for p in np.asarray(points, dtype=float).reshape(-1, 3):
+        if len(base) == 0 or np.min(np.linalg.norm(base - p, axis=1)) > tol:
+            keep.append(p)
+            base = np.vstack([base, p])
+    return np.array(keep).reshape(-1, 3)
 
 
 @dataclass(frozen=True)
-class RangeTable:
-    """Simulated ranges of every candidate anchor at every node.
+class SearchOptions:
+    """Settings of the range-table search (:func:`simulated_select`).
 
-    candidates (N, 3) and nodes (P, 3) in metres; ranges (R, P, N) estimated ranges in
-    metres, realization r of candidate j drawn from its own stream (see
-    :func:`range_table`); distances (P, N) the true ranges; region (lo (3,), hi (3,)) the
-    room's box, where the positioning starts (as in :func:`simulation.evaluate_layout`).
+    spacing : candidate grid spacing on the mounting surfaces (m).
+    draws, exact_draws, mount_tolerance : the table's draws (:func:`range_table`): how
+        many, how many keep the nodes and planned points exactly, and the radius (m) of
+        the mounting error in the others.
+    chains : independent stochastic searches, each from its own start.
+    random_starts : random layouts scored to pick each chain's start (the best is used).
+    neighbours : the swap neighbourhood: this many nearest candidates of an anchor.
+    batch : swaps sampled from the neighbourhood and scored together at each step.
+    patience : steps without a gain before a kick.
+    evaluations : layouts scored per chain (the descent that finishes it comes on top).
+    fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off).
+    fine_steps : lattice steps on each side of an anchor along each in-plane axis.
+    fine_optima : optima that get fine columns and descend on the grown table.
+    keep : distinct optima returned as seeds.
+    precision : the receiver DSP's precision for the table.
     """
 
-    candidates: np.ndarray
-    nodes: np.ndarray
-    ranges: np.ndarray
-    distances: np.ndarray
-    region: tuple[np.ndarray, np.ndarray]
+    spacing: float = 0.4
+    draws: int = 2
+    exact_draws: int = 1
+    mount_tolerance: float = 0.03
+    chains: int = 2
+    random_starts: int = 30
+    neighbours: int = 48
+    batch: int = 24
+    patience: int = 16
+    evaluations: int = 3000
+    fine_spacings: tuple[float, ...] = ()
+    fine_steps: int = 1
+    fine_optima: int = 2
+    keep: int = 3
+    precision: str = "float32"
 
-    @property
-    def windows(self) -> int:
-        """Received windows simulated to build the table (R · P · N)."""
-        return int(self.ranges.size)
+    def __post_init__(self) -> None:
+        checks.real("spacing", self.spacing, low=0.05, high=10.0, unit="m")
+        checks.count("draws", self.draws, low=1, high=100)
+        checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
+        checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
+        checks.count("chains", self.chains, low=1, high=10_000)
+        checks.count("random_starts", self.random_starts, low=1, high=100_000)
+        checks.count("neighbours", self.neighbours, low=1, high=10_000)
+        checks.count("batch", self.batch, low=1, high=self.neighbours)
+        checks.count("patience", self.patience, low=1, high=100_000)
+        checks.count("evaluations", self.evaluations, low=1, high=10**7)
+        object.__setattr__(self, "fine_spacings", tuple(self.fine_spacings))
+        for s in self.fine_spacings:
+            checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
+        checks.count("fine_steps", self.fine_steps, low=1, high=10)
+        checks.count("fine_optima", self.fine_optima, low=1, high=1000)
+        checks.count("keep", self.keep, low=1, high=1000)
+        checks.choice("precision", self.precision, ("float64", "float32"))
 
 
-def _table_stream(seed: int, candidate: int, realization: int) -> np.random.Generator:
-    return np.random.Generator(
-        np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(0, candidate, realization)))
-    )
+def _stream(seed: int, *key: int) -> np.random.Generator:
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
 
 
-def _table_chunk(room: Room, candidates, ids, nodes, realizations: int, seed: int, precision):
-    """(R, P, n) ranges and (P, n) distances of candidates (n, 3) with global indices ids."""
-    from simulation.evaluation import RangingScene
-
-    scene = RangingScene(room, candidates, nodes, precision=precision)
-    P, n, N = scene.windows.shape
-    out = np.empty((realizations, P, n))
-    for r in range(realizations):
-        noise = np.stack(
-            [
-                s * _table_stream(seed, int(j), r).standard_normal((P, N))
-                for s, j in zip(scene.noise_sigma, ids, strict=True)
-            ],
-            axis=1,
+def _advance(table, statistic, nbr, opt, chains, until):
+    """Advance each chain (one job) to ``until`` scored layouts; returns them."""
+    return [
+        c.advance(
+            table,
+            statistic,
+            nbr,
+            batch=opt.batch,
+            patience=opt.patience,
+            until=until,
+            budget=opt.evaluations,
         )
-        out[r] = scene.dsp.ranges(scene.windows + noise, room.speed_of_sound)
-    return out, scene.distances
+        for c in chains
+    ]
 
 
-def range_table(
+def _finish(table, statistic, nbr, chains, seed):
+    """The finishing descent of each chain's best layout; [(S, cost, local, n)]."""
+    out = []
+    for k, c in chains:
+        score = _Scorer(table, statistic, 10**9)
+        S, f, local = descend(c.best, c.fbest, nbr, score, _stream(seed, 11, k))
+        out.append((np.sort(S), f, local, c.nfev + score.nfev))
+    return out
+
+
+def _descents(table, statistic, nbr, layouts, seed, key):
+    """Descent of each layout (:func:`descend`) on ``table``; [(S, cost, local, n)]."""
+    out = []
+    for i, S in enumerate(layouts):
+        rng = _stream(seed, key, i)
+        score = _Scorer(table, statistic, 10**9)
+        S, f, local = descend(S, float(score([S])[0]), nbr, score, rng)
+        out.append((np.sort(S), f, local, score.nfev))
+    return out
+
+
+def _map(executor, fn, jobs):
+    if executor is None:
+        return [fn(*job) for job in jobs]
+    return [f.result() for f in [executor.submit(fn, *job) for job in jobs]]
+
+
+def _split(items: list, parts: int) -> list[list]:
+    return [items[i::parts] for i in range(parts) if items[i::parts]]
+
+
+def _distinct(found) -> list[tuple[np.ndarray, float]]:
+    out: list[tuple[np.ndarray, float]] = []
+    for S, f, *_ in sorted(found, key=lambda t: t[1]):
+        if math.isfinite(f) and not any(np.array_equal(S, T) for T, _ in out):
+            out.append((S, float(f)))
+    return out
+
+
+#: progress reports per chain: the chains advance in this many segments
+SEGMENTS = 8
+
+
+def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress):
+    """Start, advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
+    ``workers`` jobs; [(S, cost, local, evaluations)] per chain."""
+    chains = [
+        Chain.start(table, M, statistic, opt.random_starts, _stream(seed, 10, k))
+        for k in range(opt.chains)
+    ]
+    parts = _split(list(range(opt.chains)), max(1, workers))
+    for seg in range(1, SEGMENTS + 1):
+        until = opt.evaluations * seg // SEGMENTS
+        jobs = [(table, statistic, nbr, opt, [chains[k] for k in ks], until) for ks in parts]
+        for ks, done in zip(parts, _map(executor, _advance, jobs), strict=True):
+            for k, c in zip(ks, done, strict=True):
+                chains[k] = c
+        if progress:
+            progress("search", seg, SEGMENTS + 1)
+    jobs = [(table, statistic, nbr, [(k, chains[k]) for k in ks], seed) for ks in parts]
+    found = [r for part in _map(executor, _finish, jobs) for r in part]
+    if progress:
+        progress("search", SEGMENTS + 1, SEGMENTS + 1)
+    return found
+
+
+def simulated_select(
     room: Room,
-    candidates,
-    nodes=None,
+    M: int,
     *,
-    realizations: int = 2,
+    statistic: str = "variance",
+    options: SearchOptions | None = None,
+    table: RangeTable | None = None,
+    nodes=None,
     seed: int = 0,
     executor: Executor | None = None,
-    chunk: int = 24,
-    precision: str = "float64",
-) -> RangeTable:
-    """Simulate ``realizations`` noisy ranges of every candidate (N, 3) at every node.
+    workers: int = 1,
+    progress=None,
+) -> SimulatedSelection:
+    """Choose M of the candidate points minimizing a simulated error statistic on a range
+    table (the module docstring gives the steps).
 
-    Candidate j's realization r draws its noise from ``SeedSequence(seed, spawn_key=(0, j,
-    r))``, so the table does not depend on ``chunk`` or on the executor. ``chunk``
-    candidates are simulated per task (memory ≈ chunk × P × 192 × 16 bytes).
+    table : a table to search (built from ``options`` and ``nodes`` when None; it grows
+        by the fine lattices and is returned in the result).
+    executor, workers : the chains run as ``workers`` jobs on ``executor``; the result
+        does not depend on either.
+    progress : an optional callable ``progress(stage, done, total)`` reporting the search
+        ("search", then "fine") as it goes.
     """
-    cand = room.check_anchors(candidates, min_anchors=1)
-    nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
-    if int(realizations) != realizations or realizations < 1:
-        raise ValueError(f"realizations: must be an integer >= 1, got {realizations}")
-    if int(chunk) != chunk or chunk < 1:
-        raise ValueError(f"chunk: must be an integer >= 1, got {chunk}")
-    starts = range(0, len(cand), int(chunk))
-    args = [
-        (room, cand[i : i + chunk], np.arange(i, min(i + chunk, len(cand))), nodes) for i in starts
-    ]
-    extra = (int(realizations), int(seed), precision)
-    if executor is None:
-        parts = [_table_chunk(*a, *extra) for a in args]
-    else:
-        parts = [f.result() for f in [executor.submit(_table_chunk, *a, *extra) for a in args]]
-    ranges = np.concatenate([p[0] for p in parts], axis=2)
-    distances = np.concatenate([p[1] for p in parts], axis=1)
-    region = (np.zeros(3), np.asarray(room.size, dtype=float))
-    return RangeTable(cand, nodes, ranges, distances, region)
+    opt = options or SearchOptions()
+    M = checks.count("M", M, low=4, high=1000)
+    t0 = time.perf_counter()
+    if table is None:
+        cand = new_points(np.empty((0, 3)), candidate_grid(room, opt.spacing))
+        if len(cand) < M:
+            raise ValueError(f"candidates: need at least M = {M} points, got {len(cand)}")
+        table = range_table(
+            room,
+            cand,
+            nodes,
+            draws=opt.draws,
+            exact_draws=opt.exact_draws,
+            mount_tolerance=opt.mount_tolerance,
+            seed=seed,
+            executor=executor,
+            precision=opt.precision,
+        )
+    if len(table.candidates) < M:
+        raise ValueError(f"candidates: need at least M = {M} points, got {len(table.candidates)}")
+    t1 = time.perf_counter()
+    nbr = nearest(table.candidates, opt.neighbours)
+    found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress)
+    nfev = sum(r[3] for r in found)
+    t2 = time.perf_counter()
+    for level, spacing in enumerate(opt.fine_spacings):
+        best = _distinct(found)[: opt.fine_optima]
+        points = np.concatenate(
+            [fine_points(room, table.candidates[S], spacing, opt.fine_steps) for S, _ in best]
+        )
+        table = extend_table(room, table, new_points(table.candidates, points), executor=executor)
+        nbr = nearest(table.candidates, opt.neighbours)
+        jobs = [
+            (table, statistic, nbr, part, seed, 20 + level)
+            for part in _split([S for S, _ in best], max(1, workers))
+        ]
+        found = [r for part in _map(executor, _descents, jobs) for r in part] + found
+        nfev += sum(r[3] for r in found[: len(best)])
+    if progress and opt.fine_spacings:
+        progress("fine", 1, 1)
+    t3 = time.perf_counter()
+    return _selection(table, statistic, found, nfev, (t0, t1, t2, t3))
 
 
-def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
-    """The simulated ``statistic`` of the Euclidean errors of each layout of candidates
-    ``layouts`` (L, M) indices, over all R × P table entries: (L,), +inf for a layout
-    where some node fails. The layouts are positioned in one batch."""
-    from simulation.positioning import locate
-
-    S = np.asarray(layouts, dtype=int)
-    ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, R, P, M)
-    x = locate(table.candidates[S], ranges, region=table.region)
-    e = np.linalg.norm(x - table.nodes, axis=-1)  # (L, R, P)
-    stat = SIMULATED_STATISTICS[statistic]
-    return np.array([stat(el) if np.all(np.isfinite(el)) else math.inf for el in e])
-
-
-def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:
-    """:func:`table_costs` of the one layout made of the candidates ``indices`` (M,)."""
-    return float(table_costs(table, np.asarray(indices)[None], statistic)[0])
-
-
-def _local_search(
-    table: RangeTable,
-    M: int,
-    statistic: str,
-    neighbours: np.ndarray,
-    start: np.ndarray | None,
-    random_starts: int,
-    max_evaluations: int,
-    seed: int,
-    key: int,
-) -> tuple[np.ndarray, float, int]:
-    """One first-improvement swap search; returns (indices (M,), cost, evaluations)."""
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(1, key))))
-    N = len(table.candidates)
-    nfev = 0
-
-    def costs(layouts):
-        nonlocal nfev
-        nfev += len(layouts)
-        return table_costs(table, np.stack(layouts), statistic)
-
-    if start is None:  # the best of a few random subsets
-        tries = [rng.choice(N, M, replace=False) for _ in range(random_starts)]
-        values = costs(tries)
-        S, f = tries[int(np.argmin(values))].copy(), float(np.min(values))
-    else:
-        S = np.asarray(start, dtype=int).copy()
-        f = float(costs([S])[0])
-    improved = True
-    while improved and nfev < max_evaluations:
-        improved = False
-        for i in rng.permutation(M):
-            # the swaps of anchor i, scored in one batch; the first that improves is taken
-            js = [j for j in rng.permutation(neighbours[S[i]]) if j not in S]
-            js = js[: max_evaluations - nfev]
-            if not js:
-                continue
-            swaps = [np.where(np.arange(M) == i, j, S) for j in js]
-            g = costs(swaps)
-            better = np.flatnonzero(g < f)
-            if better.size:
-                S, f, improved = swaps[better[0]], float(g[better[0]]), True
-                break
-    return np.sort(S), f, nfev
+def _selection(table, statistic, found, nfev, t) -> SimulatedSelection:
+    optima = _distinct(found)
+    if not optima:
+        raise ValueError("simulated_select: no layout of the candidates has a finite cost")
+    best, cost = optima[0]
+    local = next(r[2] for r in found if np.array_equal(r[0], best))
+    return SimulatedSelection(
+        anchors=table.candidates[best],
+        indices=best,
+        cost=cost,
+        statistic=statistic,
+        optima=optima,
+        candidates=table.candidates,
+        nfev=int(nfev),
+        table_windows=table.windows,
+        timings={"table": t[1] - t[0], "search": t[2] - t[1], "fine": t[3] - t[2]},
+        message="local optimum" if local else "evaluation budget reached",
+        table=table,
+    )
 
 
 @dataclass
 class SimulatedSelection:
     """Result of :func:`simulated_select`.
 
-    anchors (M, 3) the best layout found and indices (M,) its candidates; cost its
-    statistic on the range table; optima the local optima of all starts as (indices,
-    cost), best first; nfev the layouts scored on the table; table_windows the windows
-    simulated for the table and equivalent_evaluations that count divided by the windows
-    of one full evaluation of an M-anchor layout (P · M); timings in seconds.
+    anchors (M, 3) the best layout and indices (M,) its candidates in ``candidates``;
+    cost its statistic on the table; optima the distinct local optima found, as
+    (indices, cost), best first; nfev the layouts scored on the table; table_windows the
+    received windows simulated; timings in seconds.
     """
 
     anchors: np.ndarray
@@ -203,9 +435,9 @@ class SimulatedSelection:
     candidates: np.ndarray
     nfev: int
     table_windows: int
-    equivalent_evaluations: float
     timings: dict[str, float] = field(default_factory=dict)
     message: str = ""
+    table: RangeTable | None = field(default=None, repr=False)
 
     @property
     def x(self) -> np.ndarray:
@@ -228,108 +460,6 @@ class SimulatedSelection:
             "optima": [{"indices": S.tolist(), "cost": c} for S, c in self.optima],
             "nfev": self.nfev,
             "table_windows": self.table_windows,
-            "equivalent_evaluations": self.equivalent_evaluations,
             "timings": self.timings,
             "message": self.message,
         }
-
-
-def simulated_select(
-    room: Room,
-    M: int,
-    *,
-    statistic: str = "variance",
-    spacing: float = 0.6,
-    candidates=None,
-    realizations: int = 3,
-    starts: int = 8,
-    random_starts: int = 30,
-    neighbours: int = 25,
-    initial=None,
-    max_evaluations: int = 5000,
-    seed: int | None = None,
-    nodes=None,
-    executor: Executor | None = None,
-    table: RangeTable | None = None,
-) -> SimulatedSelection:
-    """Choose M of the candidate points minimizing a simulated error statistic.
-
-    Builds the range table (``realizations`` noise draws of every candidate at every
-    node, :func:`range_table`; candidates default to ``candidate_grid(room, spacing)``)
-    and runs ``starts`` local searches from the best of ``random_starts`` random subsets,
-    plus one from each selection in ``initial`` (k, M) candidate indices. A search swaps
-    one anchor for one of its ``neighbours`` nearest unused candidates whenever the cost
-    falls, until a full sweep brings no gain or ``max_evaluations`` layouts were scored.
-    The searches run on ``executor`` when given; the result does not depend on it.
-
-    statistic : "variance" (the paper's cost), "mean", "p95" or "rms" of the Euclidean
-        position errors over all R × P table entries.
-    """
-    if statistic not in SIMULATED_STATISTICS:
-        raise ValueError(f"statistic: unknown {statistic!r}; allowed: {list(SIMULATED_STATISTICS)}")
-    if int(M) != M or M < 4:
-        raise ValueError(f"M: need an integer number of anchors >= 4, got {M}")
-    for name, value, low in (
-        ("starts", starts, 0),
-        ("random_starts", random_starts, 1),
-        ("neighbours", neighbours, 1),
-        ("max_evaluations", max_evaluations, 1),
-    ):
-        if int(value) != value or value < low:
-            raise ValueError(f"{name}: must be an integer >= {low}, got {value}")
-    seed = int(np.random.SeedSequence().entropy % 2**63) if seed is None else int(seed)
-    t0 = time.perf_counter()
-    if table is None:
-        cand = candidate_grid(room, spacing) if candidates is None else candidates
-        table = range_table(
-            room, cand, nodes, realizations=realizations, seed=seed, executor=executor
-        )
-    N = len(table.candidates)
-    if N < M:
-        raise ValueError(f"candidates: need at least M = {M} points, got {N}")
-    inits = [] if initial is None else [np.asarray(s, dtype=int) for s in np.atleast_2d(initial)]
-    for s in inits:
-        if s.shape != (M,) or s.min() < 0 or s.max() >= N or len(set(s.tolist())) != M:
-            raise ValueError(f"initial: each selection must be {M} distinct indices in [0, {N})")
-    if not inits and starts == 0:
-        raise ValueError("starts: need at least one start (starts >= 1 or initial)")
-    t1 = time.perf_counter()
-
-    d = np.linalg.norm(table.candidates[:, None] - table.candidates[None], axis=-1)
-    nbr = np.argsort(d, axis=1, kind="stable")[:, 1 : int(neighbours) + 1]
-
-    jobs = [None] * int(starts) + inits
-    args = [
-        (table, int(M), statistic, nbr, s, int(random_starts), int(max_evaluations), seed, k)
-        for k, s in enumerate(jobs)
-    ]
-    if executor is None:
-        found = [_local_search(*a) for a in args]
-    else:
-        found = [f.result() for f in [executor.submit(_local_search, *a) for a in args]]
-    t2 = time.perf_counter()
-
-    optima: list[tuple[np.ndarray, float]] = []
-    for S, f, _ in sorted(found, key=lambda t: t[1]):
-        if not any(np.array_equal(S, T) for T, _ in optima):
-            optima.append((S, float(f)))
-    best, cost = optima[0]
-    capped = any(n >= max_evaluations for _, _, n in found)
-    message = "local optima reached" if not capped else "evaluation budget reached in a search"
-    if not math.isfinite(cost):
-        message = "no layout with finite cost found"
-        logger.warning("simulated_select: %s", message)
-    P = len(table.nodes)
-    return SimulatedSelection(
-        anchors=table.candidates[best],
-        indices=best,
-        cost=cost,
-        statistic=statistic,
-        optima=optima,
-        candidates=table.candidates,
-        nfev=int(sum(n for _, _, n in found)),
-        table_windows=table.windows,
-        equivalent_evaluations=table.windows / (P * M),
-        timings={"table": t1 - t0, "search": t2 - t1},
-        message=message,
-    )

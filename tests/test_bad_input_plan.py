@@ -1,8 +1,4 @@
-"""Bad input to seed_then_pso and its costs (issue #13): the optimizer's part.
-
-These wait for the optimizer rework to apply simulation.checks in placement/plan.py,
-placement/costs.py and placement/simselect.py; remove the xfail marks then.
-"""
+"""Bad input to seed_then_pso and its costs (issue #13): the optimizer's part."""
 
 import time
 
@@ -14,8 +10,6 @@ from placement.plan import seed_then_pso
 from placement.pso import PSOOptions
 from simulation import Room
 from simulation.checks import geometry
-
-pytestmark = pytest.mark.xfail(strict=False, reason="pending optimizer rework")
 
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]
@@ -42,7 +36,7 @@ def refused(name, fn, within=5.0):
         ("M", True),
         ("M", 300),
         ("finalists", 1.5),
-        ("finalist_realizations", 0),
+        ("finalist_draws", 0),
         ("validate_realizations", -1),
         ("realizations", True),
         ("sigma", "0.04"),
@@ -67,8 +61,9 @@ def test_options_must_be_pso_options():
     ("search", "name"),
     [
         ({"start": 1}, "start"),
-        ({"starts": -1}, "starts"),
+        ({"chains": -1}, "chains"),
         ({"spacing": 0}, "spacing"),
+        ({"chains": 0}, "chains"),
         ("starts", "search"),
     ],  # fmt: skip
 )
@@ -100,10 +95,16 @@ def test_never_returns_a_degenerate_layout():
 
 
 def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
+    from placement.simselect import SearchOptions
+    from placement.validation import ValidationOptions
+
     ckpt = tmp_path / "state.json"
-    kw = dict(cost="variance", particles=3, iterations=2, validate_realizations=0, seed=0)
-    kw.update(progress=False, nodes=NODES, finalists=1, checkpoint=ckpt)
-    kw["search"] = {"starts": 1, "realizations": 1, "spacing": 2.0}
+    kw = dict(cost="variance", particles=3, iterations=2, seed=0, progress=False)
+    kw.update(nodes=NODES, finalists=1, checkpoint=ckpt)
+    kw["validation"] = ValidationOptions(realizations=0)
+    kw["search"] = SearchOptions(
+        spacing=2.0, chains=1, evaluations=20, random_starts=2, neighbours=6, batch=3
+    )
     first = seed_then_pso(ROOM, 4, **kw)
     import placement.simselect as simselect
 
@@ -114,3 +115,4 @@ def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
     again = seed_then_pso(ROOM, 4, **kw)
     np.testing.assert_array_equal(first.anchors, again.anchors)
     assert [s.name for s in first.seeds] == [s.name for s in again.seeds]
+    assert again.settings["seed_search"]["resumed"]

@@ -1,30 +1,38 @@
 import json
-from itertools import combinations
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 
 import placement
-from placement.costs import SimulatedCost
-from placement.plan import rescore_finalists, seed_then_pso
+from placement.costs import DrawsCost
+from placement.plan import choose_finalist, seed_then_pso
+from placement.rangetable import node_draws, range_table, table_errors
+from placement.simselect import SearchOptions
+from placement.validation import ValidationOptions, validate_layout
 from simulation import Room
 
 ROOM = Room.techtile()
+NODES = ROOM.grid()[::27]  # 10 nodes
+SMALL = SearchOptions(
+    spacing=2.0, chains=2, evaluations=40, random_starts=3, neighbours=8, batch=4, patience=3
+)
+QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10, mount_draws=2)
+
+
+def _plan(**kw):
+    base = dict(search=SMALL, particles=4, iterations=2, validation=QUICK, seed=0)
+    base.update(progress=False, nodes=NODES)
+    base.update(kw)
+    return seed_then_pso(ROOM, 4, **base)
 
 
 def test_seed_then_pso_bound_driven_with_user_seeds():
     seeds = ROOM.corners_layout()[None]
     res = seed_then_pso(
-        ROOM,
-        4,
-        particles=6,
-        iterations=5,
-        cost="peb",
-        seeds=seeds,
-        seed=0,
-        progress=False,
+        ROOM, 4, particles=6, iterations=5, cost="peb", seeds=seeds, seed=0, progress=False,
         validate_realizations=0,
-    )
+    )  # fmt: skip
     assert res.anchors.shape == (4, 3)
     assert placement.on_surfaces(ROOM, res.anchors).all()
     assert res.seeds[0].name == "user-1"
@@ -33,7 +41,70 @@ def test_seed_then_pso_bound_driven_with_user_seeds():
     assert np.all(np.diff(res.history) <= 0)
     d = json.loads(res.to_json())
     assert d["settings"]["M"] == 4 and len(d["history"]) == res.nit
-    assert set(res.timings) >= {"seeding", "pso", "validation", "total"}
+    assert set(res.timings) >= {"pso", "validation", "total"}
+
+
+def test_the_drawn_cost_is_a_range_table_of_the_layout():
+    sets = node_draws(ROOM, NODES, 2, 1, seed=3)
+    cost = DrawsCost(ROOM, sets, exact_draws=1, mount_tolerance=0.03, seed=9)
+    a = ROOM.corners_layout()
+    t = range_table(ROOM, a, sets, exact_draws=1, mount_tolerance=0.03, seed=9)
+    e = table_errors(t, np.arange(4)[None])[0]
+    assert cost(a) == pytest.approx(np.var(e)) and cost(a) == cost(a, None)  # deterministic
+    assert DrawsCost(ROOM, sets, exact_draws=1, mount_tolerance=0.03, seed=10)(a) != cost(a)
+
+
+def test_seed_then_pso_simulated_chain_and_its_phases():
+    res = _plan()
+    assert res.success and placement.on_surfaces(ROOM, res.anchors).all()
+    assert [s.name for s in res.seeds][:1] == ["search-1"]
+    assert set(res.timings) >= {"search", "pso", "finalists", "validation", "total"}
+    n = res.settings["nfev_by_phase"]
+    assert n["search"] > 0 and n["pso"] == res.nfev == 8
+    v = res.validation
+    assert v["realizations"] == 2 and np.shape(v["errors"]) == (2, len(NODES))
+    assert v["std"] == pytest.approx(np.std(v["errors"]), abs=1e-5)
+    assert set(v["held_out"]) >= {"grid", "random"} and v["mounting"]["draws"] == 2
+    json.loads(res.to_json())
+
+
+def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws():
+    res = _plan(finalists=3)
+    f = res.finalists
+    assert {s.name for s in res.seeds} <= {d["source"] for d in f}  # seeds always compete
+    assert not any(
+        np.allclose(a["anchors"], b["anchors"]) for i, a in enumerate(f) for b in f[i + 1 :]
+    )
+    best = min(f, key=lambda d: d["cost"])
+    np.testing.assert_array_equal(res.anchors, best["anchors"])
+    # the fresh draws are not the swarm's: the scores differ from the swarm's costs
+    assert any(d["cost"] != d["pso_cost"] for d in f)
+
+
+def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
+    res = _plan()
+    fresh = DrawsCost(ROOM, node_draws(ROOM, NODES, 2, 1, seed=1), exact_draws=1, seed=4)
+    one = choose_finalist(res.pso, res.seeds, fresh, 2)
+    with ThreadPoolExecutor(2) as ex:
+        two = choose_finalist(res.pso, res.seeds, fresh, 2, ex)
+    assert [d["cost"] for d in one] == [d["cost"] for d in two]
+    assert [d["cost"] for d in one] == [fresh(d["anchors"]) for d in one]
+
+
+def test_same_result_serially_and_with_an_executor():
+    a = _plan(seed=5)
+    with ThreadPoolExecutor(2) as ex:
+        b = _plan(seed=5, executor=ex, workers=2)
+    np.testing.assert_array_equal(a.anchors, b.anchors)
+    assert a.validation["std"] == b.validation["std"]
+    assert a.validation["held_out"] == b.validation["held_out"]
+
+
+def test_options_are_honoured_and_clashes_refused():
+    res = _plan(particles=None, iterations=None, options=placement.PSOOptions(4, 2))
+    assert res.nfev == 8 and res.settings["particles"] == 4
+    with pytest.raises(ValueError, match="particles"):
+        _plan(particles=5, options=placement.PSOOptions(4, 2))
 
 
 def test_seed_then_pso_rejects_bad_input():
@@ -43,29 +114,19 @@ def test_seed_then_pso_rejects_bad_input():
         seed_then_pso(ROOM, 4, cost="peb", seeds="best", progress=False)
     with pytest.raises(ValueError, match="validate_realizations"):
         seed_then_pso(ROOM, 4, cost="peb", seeds=None, validate_realizations=-1)
-
-
-def test_seed_then_pso_keeps_the_finalist_with_the_lowest_rescored_cost():
-    nodes = ROOM.grid()[::27]
-    kw = dict(particles=6, iterations=3, seeds=None, seed=3, progress=False, nodes=nodes)
-    res = seed_then_pso(
-        ROOM, 4, finalists=3, finalist_realizations=2, validate_realizations=0, **kw
-    )
-    f = res.finalists
-    assert 2 <= len(f) <= 3
-    assert f[0]["pso_cost"] == res.pso.cost
-    assert np.all(np.diff([d["pso_cost"] for d in f]) >= 0)
-    assert not any(np.allclose(a["anchors"], b["anchors"]) for a, b in combinations(f, 2))
-    best = min(f, key=lambda d: d["cost"])
-    assert np.array_equal(res.anchors, best["anchors"]) and res.cost == best["pso_cost"]
-    # re-scored on common draws: the cost is the simulated statistic with that seed
-    scorer = SimulatedCost(ROOM, "variance", realizations=2, nodes=nodes)
-    again = rescore_finalists(res.pso, scorer, 3, 2, seed=7)
-    assert [d["cost"] for d in again] == [
-        scorer(d["anchors"], np.random.default_rng(7)) for d in again
-    ]
-    # one finalist: the swarm's best as it is
-    one = seed_then_pso(ROOM, 4, finalists=1, validate_realizations=0, **kw)
-    assert np.array_equal(one.anchors, res.pso.anchors) and one.finalists == []
+    with pytest.raises(ValueError, match="start"):
+        seed_then_pso(ROOM, 4, search={"start": 1}, progress=False)
     with pytest.raises(ValueError, match="finalists"):
-        seed_then_pso(ROOM, 4, finalists=0, **kw)
+        _plan(finalists=0)
+
+
+def test_validation_checks_are_reproducible_and_independent_of_the_executor():
+    a = ROOM.corners_layout()
+    v1 = validate_layout(ROOM, a, seed=3, options=QUICK, nodes=NODES)
+    with ThreadPoolExecutor(2) as ex:
+        v2 = validate_layout(ROOM, a, seed=3, options=QUICK, nodes=NODES, executor=ex)
+    assert v1 == v2
+    assert v1["held_out"]["grid"]["nodes"] == 420
+    assert v1["mounting"]["n"] == 2 * len(NODES)
+    v3 = validate_layout(ROOM, a, seed=4, options=QUICK, nodes=NODES)
+    assert v3["std"] != v1["std"]

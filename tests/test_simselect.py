@@ -6,17 +6,27 @@ import numpy as np
 import pytest
 
 import simulation
-from placement.simselect import range_table, simulated_select, table_cost, table_costs
-from placement.surfaces import candidate_grid, on_surfaces
+from placement.rangetable import (
+    extend_table,
+    mounted_points,
+    node_draws,
+    range_table,
+    table_cost,
+    table_costs,
+    table_errors,
+)
+from placement.simselect import Chain, SearchOptions, descend, nearest, simulated_select
+from placement.surfaces import candidate_grid, on_surfaces, surface_index
 from simulation import Room
 
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::9]  # 30 nodes: small and fast
 CAND = candidate_grid(ROOM, 2.0)
+REGION = (np.zeros(3), np.asarray(ROOM.size, dtype=float))
 
 
 def test_a_range_depends_on_its_own_anchor_only():
-    # the premise of the range table: TDM anchors, per-anchor noise level (paper §V-A)
+    # the premise of the range table: TDM anchors, per-anchor noise level
     a, b = CAND[[0, 5, 11, 17]], CAND[[0, 3, 8, 20]]
     ra = simulation.simulate_ranges(ROOM, a, NODES, noise=False)
     rb = simulation.simulate_ranges(ROOM, b, NODES, noise=False)
@@ -25,47 +35,102 @@ def test_a_range_depends_on_its_own_anchor_only():
 
 
 def test_range_table_is_independent_of_chunking_and_executor():
-    t1 = range_table(ROOM, CAND[:10], NODES, realizations=2, seed=4, chunk=3)
+    kw = dict(draws=3, exact_draws=1, mount_tolerance=0.03, seed=4)
+    t1 = range_table(ROOM, CAND[:10], NODES, chunk=3, **kw)
     with ThreadPoolExecutor(2) as ex:
-        t2 = range_table(ROOM, CAND[:10], NODES, realizations=2, seed=4, chunk=7, executor=ex)
+        t2 = range_table(ROOM, CAND[:10], NODES, chunk=7, executor=ex, **kw)
     np.testing.assert_array_equal(t1.ranges, t2.ranges)
-    assert t1.ranges.shape == (2, len(NODES), 10) and t1.windows == 2 * len(NODES) * 10
-    # two realizations differ (noise), and both scatter around the true ranges
+    assert t1.ranges.shape == (3, len(NODES), 10) and t1.windows == 3 * len(NODES) * 10
     assert not np.array_equal(t1.ranges[0], t1.ranges[1])
-    err = t1.ranges - t1.distances
-    assert np.mean(np.abs(err) < 0.5) > 0.5  # this room: about a quarter are outliers
-    t3 = range_table(ROOM, CAND[:10], NODES, realizations=2, seed=5, chunk=3)
+    t3 = range_table(ROOM, CAND[:10], NODES, chunk=3, **{**kw, "seed": 5})
     assert not np.array_equal(t1.ranges, t3.ranges)
 
 
-def test_table_cost_is_the_simulated_statistic_of_the_located_nodes():
-    t = range_table(ROOM, CAND, NODES, realizations=2, seed=1)
+def test_extended_table_equals_the_bigger_table():
+    kw = dict(draws=2, exact_draws=1, mount_tolerance=0.03, seed=1)
+    small = range_table(ROOM, CAND[:6], NODES, **kw)
+    grown = extend_table(ROOM, small, CAND[6:11])
+    whole = range_table(ROOM, CAND[:11], NODES, **kw)
+    np.testing.assert_array_equal(grown.ranges, whole.ranges)
+    np.testing.assert_array_equal(grown.distances, whole.distances)
+
+
+def test_draws_move_nodes_within_their_cells_and_anchors_within_the_tolerance():
+    nodes = ROOM.grid()
+    sets = node_draws(ROOM, nodes, 3, 1, seed=2)
+    np.testing.assert_array_equal(sets[0], nodes)
+    step = np.array([0.9875, 0.78, 0.575])
+    move = np.abs(sets[1:] - nodes)
+    assert np.all(move <= step / 2 + 1e-9) and np.mean(move > 0.01) > 0.7  # walls clip
+    assert np.all(ROOM.contains(sets.reshape(-1, 3), margin=ROOM.node_margin - 1e-12))
+    c = CAND[:12]
+    m = mounted_points(ROOM, c, np.arange(12), 1, 0.03, False, seed=3)
+    d = np.linalg.norm(m - c, axis=1)
+    assert np.all(d <= 0.03 + 1e-12) and np.all(on_surfaces(ROOM, m))
+    # in the plane of its own surface: the coordinate across the plane does not move
+    same = surface_index(ROOM, m) == surface_index(ROOM, c)
+    assert same.mean() > 0.8
+    np.testing.assert_array_equal(mounted_points(ROOM, c, np.arange(12), 0, 0.03, True, 3), c)
+
+
+def test_table_errors_are_the_located_nodes_of_every_draw():
+    t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, seed=1)
     S = np.array([0, 6, 12, 19])
-    x = simulation.locate(
-        CAND[S], t.ranges[:, :, S], region=(np.zeros(3), np.asarray(ROOM.size, dtype=float))
-    )
-    e = np.linalg.norm(x - NODES, axis=-1)
+    x = simulation.locate(CAND[S], t.ranges[:, :, S], region=REGION)
+    e = np.linalg.norm(x - t.nodes, axis=-1).ravel()
+    np.testing.assert_allclose(table_errors(t, S[None])[0], e)
     assert table_cost(t, S, "variance") == pytest.approx(np.var(e))
     assert table_cost(t, S, "p95") == pytest.approx(np.percentile(e, 95))
 
 
-def test_simulated_select_returns_a_swap_local_optimum():
-    cand = CAND[:10]
-    t = range_table(ROOM, cand, NODES, realizations=1, seed=2)
-    sel = simulated_select(ROOM, 4, table=t, starts=2, random_starts=3, neighbours=9, seed=0)
-    assert sel.message == "local optima reached"
+def test_layouts_scored_in_one_batch_score_as_one_by_one():
+    t = range_table(ROOM, CAND[:12], NODES, draws=2, seed=3)
+    rng = np.random.default_rng(2)
+    layouts = np.stack([rng.choice(12, 4, replace=False) for _ in range(6)])
+    np.testing.assert_array_equal(table_costs(t, layouts), [table_cost(t, S) for S in layouts])
+
+
+def test_descent_returns_a_local_optimum_of_its_neighbourhood():
+    t = range_table(ROOM, CAND[:14], NODES, seed=2)
+    nbr = nearest(t.candidates, 6)
+    from placement.simselect import _Scorer
+
+    score = _Scorer(t, "variance", 10**6)
+    start = np.array([0, 1, 2, 3])
+    S, f, local = descend(start, table_cost(t, start), nbr, score, np.random.default_rng(0))
+    assert local and f == pytest.approx(table_cost(t, S)) and f <= table_cost(t, start)
+    for i, j in itertools.product(range(4), range(6)):
+        k = nbr[S[i], j]
+        if k in S:
+            continue
+        T = S.copy()
+        T[i] = k
+        assert table_cost(t, T) >= f
+
+
+def _small(**kw):
+    base = dict(spacing=2.0, chains=2, evaluations=60, random_starts=3, neighbours=8, batch=4)
+    base.update(patience=3, draws=1)
+    base.update(kw)
+    return SearchOptions(**base)
+
+
+def test_simulated_select_returns_local_optima_better_than_random():
+    sel = simulated_select(ROOM, 4, options=_small(), nodes=NODES, seed=0)
+    t = sel.table
+    assert sel.message == "local optimum"
     assert sel.anchors.shape == (4, 3) and on_surfaces(ROOM, sel.anchors).all()
     assert sel.cost == pytest.approx(table_cost(t, sel.indices))
-    # no single swap with any unused candidate improves the returned layout
-    for i, j in itertools.product(range(4), range(10)):
-        if j in sel.indices:
-            continue
-        T = sel.indices.copy()
-        T[i] = j
-        assert table_cost(t, T) >= sel.cost
-    # and it beats the typical random layout by a margin
+    nbr = nearest(t.candidates, 8)
+    for i, j in itertools.product(range(4), range(8)):  # no swap with a neighbour improves
+        k = nbr[sel.indices[i], j]
+        if k not in sel.indices:
+            T = sel.indices.copy()
+            T[i] = k
+            assert table_cost(t, T) >= sel.cost
     rng = np.random.default_rng(0)
-    random_costs = [table_cost(t, rng.choice(10, 4, replace=False)) for _ in range(20)]
+    N = len(t.candidates)
+    random_costs = [table_cost(t, rng.choice(N, 4, replace=False)) for _ in range(20)]
     assert sel.cost < np.median(random_costs)
     costs = [c for _, c in sel.optima]
     assert costs == sorted(costs) and costs[0] == sel.cost
@@ -73,34 +138,50 @@ def test_simulated_select_returns_a_swap_local_optimum():
     assert d["indices"] == sel.indices.tolist() and d["nfev"] == sel.nfev > 0
 
 
-def test_simulated_select_is_reproducible_serial_or_parallel():
-    kw = dict(candidates=CAND, nodes=NODES, realizations=1, starts=2, random_starts=3, seed=11)
+def test_simulated_select_is_the_same_serially_with_an_executor_and_any_workers():
+    kw = dict(options=_small(chains=3), nodes=NODES, seed=11)
     s1 = simulated_select(ROOM, 4, **kw)
     with ThreadPoolExecutor(2) as ex:
-        s2 = simulated_select(ROOM, 4, executor=ex, **kw)
+        s2 = simulated_select(ROOM, 4, executor=ex, workers=2, **kw)
     np.testing.assert_array_equal(s1.indices, s2.indices)
     assert s1.cost == s2.cost and s1.nfev == s2.nfev
-    assert s1.equivalent_evaluations == pytest.approx(len(CAND) * len(NODES) / (len(NODES) * 4))
+    assert [c for _, c in s1.optima] == [c for _, c in s2.optima]
 
 
-def test_simulated_select_rejects_bad_input():
-    with pytest.raises(ValueError, match="statistic"):
-        simulated_select(ROOM, 4, statistic="median", candidates=CAND, nodes=NODES)
-    with pytest.raises(ValueError, match="M"):
-        simulated_select(ROOM, 3, candidates=CAND, nodes=NODES)
-    with pytest.raises(ValueError, match="starts"):
-        simulated_select(ROOM, 4, starts=-1, candidates=CAND, nodes=NODES)
-    with pytest.raises(ValueError, match="realizations"):
-        range_table(ROOM, CAND, NODES, realizations=0)
-    t = range_table(ROOM, CAND[:6], NODES, realizations=1, seed=0)
-    with pytest.raises(ValueError, match="initial"):
-        simulated_select(ROOM, 4, table=t, initial=[[0, 1, 2, 2]])
+def test_a_chain_advanced_in_segments_equals_one_go():
+    t = range_table(ROOM, CAND, NODES, seed=0)
+    nbr = nearest(t.candidates, 8)
+    kw = dict(batch=4, patience=3, budget=120)
+    one = Chain.start(t, 4, "variance", 3, np.random.default_rng(5))
+    one.advance(t, "variance", nbr, until=120, **kw)
+    seg = Chain.start(t, 4, "variance", 3, np.random.default_rng(5))
+    for until in (17, 50, 51, 90, 120):
+        seg.advance(t, "variance", nbr, until=until, **kw)
+    np.testing.assert_array_equal(one.best, seg.best)
+    assert one.fbest == seg.fbest and one.nfev == seg.nfev <= 120
+
+
+def test_fine_lattice_grows_the_table_and_the_result_is_not_worse():
+    coarse = simulated_select(ROOM, 4, options=_small(), nodes=NODES, seed=3)
+    fine = simulated_select(ROOM, 4, options=_small(fine_spacings=(1.0,)), nodes=NODES, seed=3)
+    assert len(fine.candidates) > len(coarse.candidates)
+    assert fine.cost <= coarse.cost + 1e-12
+    assert on_surfaces(ROOM, fine.candidates).all()
+
+
+def test_search_options_are_checked():
+    for kw, name in (
+        ({"spacing": 0}, "spacing"),
+        ({"chains": 0}, "chains"),
+        ({"batch": 100}, "batch"),
+        ({"draws": True}, "draws"),
+        ({"exact_draws": 3}, "exact_draws"),
+        ({"fine_spacings": (0.0,)}, "fine_spacings"),
+    ):
+        with pytest.raises(ValueError, match=name):
+            SearchOptions(**kw)
+    t = range_table(ROOM, CAND[:6], NODES, seed=0)
     with pytest.raises(ValueError, match="candidates"):
-        simulated_select(ROOM, 8, table=t)
-
-
-def test_layouts_scored_in_one_batch_score_as_one_by_one():
-    t = range_table(ROOM, CAND[:12], NODES, realizations=2, seed=3)
-    rng = np.random.default_rng(2)
-    layouts = np.stack([rng.choice(12, 4, replace=False) for _ in range(6)])
-    np.testing.assert_array_equal(table_costs(t, layouts), [table_cost(t, S) for S in layouts])
+        simulated_select(ROOM, 8, table=t, options=_small())
+    with pytest.raises(ValueError, match="M"):
+        simulated_select(ROOM, 3, table=t, options=_small())

@@ -22,55 +22,43 @@ MAX_SEARCH_CANDIDATES = 10_000
 def register(sub) -> None:
     p = sub.add_parser(
         "plan",
-        help="optimize an anchor layout (seeds + PSO on the full simulation)",
-        description="Plan where to mount M anchors: seeds (a simulation-driven search over "
-        "candidate points, convex relaxation and PEB refinement), particle swarm "
-        "optimization on the simulated positioning error, and validation of the best "
-        "layout. Writes result.json and layout.json to --out.",
+        help="optimize an anchor layout (range-table search + swarm on the full simulation)",
+        description="Plan where to mount M anchors: a search over candidate mounting points "
+        "on a table of simulated ranges, a particle swarm around its best layouts, a choice "
+        "among the finalists on fresh draws, and a validation of the chosen layout (at the "
+        "evaluation nodes, at held-out nodes and under mounting error). Writes result.json "
+        "and layout.json to --out.",
     )
     p.add_argument("--anchors", "-M", type=int, default=8, help="number of anchors M (8)")
     add_room_argument(p)
-    p.add_argument("--particles", type=int, default=15, help="swarm size (15)")
-    p.add_argument("--iterations", type=int, default=40, help="maximum iterations (40)")
     p.add_argument("--cost", choices=COST_NAMES, default="variance", help="cost (variance)")
+    p.add_argument("--particles", type=int, help="swarm size (library default)")
+    p.add_argument("--iterations", type=int, help="swarm iterations (library default)")
     p.add_argument(
-        "--realizations", type=int, default=1, help="noise realizations per evaluation (1)"
+        "--mount-tolerance",
+        type=float,
+        default=0.03,
+        metavar="M",
+        help="radius of the in-plane mounting error scored and validated, m (0.03)",
     )
     p.add_argument(
         "--validate-realizations",
         type=int,
         default=100,
-        help="realizations to validate the best layout (100)",
+        help="noise realizations validating the chosen layout (100; 0: no validation)",
     )
     p.add_argument("--no-seeds", action="store_true", help="unseeded swarm (paper's setting)")
-    p.add_argument(
-        "--search-starts",
-        type=int,
-        help="local searches of the simulation-driven seed search (8; 0: skip it)",
-    )
-    p.add_argument(
-        "--search-realizations",
-        type=int,
-        help="noise realizations in the seed search's range table (3)",
-    )
-    p.add_argument(
-        "--search-spacing",
-        type=float,
-        help="spacing of the seed search's candidate points in m (0.6)",
-    )
+    p.add_argument("--search-spacing", type=float, help="candidate spacing of the search, m")
+    p.add_argument("--search-chains", type=int, help="independent search chains")
+    p.add_argument("--search-evaluations", type=int, help="table layouts scored per chain")
+    p.add_argument("--search-draws", type=int, help="scene draws of the range table")
     p.add_argument(
         "--finalists",
         type=int,
-        default=None,
-        help="best distinct swarm layouts re-scored before choosing (4, at most --particles; "
-        "1: the swarm's best)",
+        default=4,
+        help="best distinct swarm layouts scored, with the seeds, on fresh draws (4)",
     )
-    p.add_argument(
-        "--finalist-realizations",
-        type=int,
-        default=10,
-        help="noise realizations per re-scored finalist (10)",
-    )
+    p.add_argument("--finalist-draws", type=int, default=3, help="fresh draws of the finalists (3)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
         "--workers",
@@ -86,7 +74,7 @@ def register(sub) -> None:
         metavar="SECONDS",
         help="a particle evaluation taking longer costs inf (default: no limit)",
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--out", metavar="DIR", default="anchorplan-out", help="output folder")
     p.set_defaults(func=run)
 
@@ -120,58 +108,60 @@ def _executor(args, stack: contextlib.ExitStack):
     return None
 
 
-def _check_args(args, room) -> None:
-    """Every number and file of the command, checked before any work."""
-    from placement.exhaustive import DEFAULT_SPACING
+def _search_options(args):
+    """The search settings given on the command line (unset: the library's defaults)."""
+    from placement.simselect import SearchOptions
+
+    given = {
+        "spacing": args.search_spacing,
+        "chains": args.search_chains,
+        "evaluations": args.search_evaluations,
+        "draws": args.search_draws,
+        "mount_tolerance": args.mount_tolerance,
+    }
+    try:
+        return SearchOptions(**{k: v for k, v in given.items() if v is not None})
+    except ValueError as exc:
+        name = str(exc).split(":")[0]
+        flag = "--mount-tolerance" if name == "mount_tolerance" else f"--search-{name}"
+        raise ValueError(f"{flag}{str(exc)[len(name) :]}") from None
+
+
+def _check_args(args, room):
+    """Every number and file of the command, checked before any work; returns the
+    search settings."""
     from placement.pso import MAX_ANCHORS, MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
     from placement.surfaces import candidate_grid
     from simulation.evaluation import BYTES_PER_RANGE
 
-    checks.count("--particles", args.particles, low=2, high=MAX_PARTICLES)
-    checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
-    checks.count("--realizations", args.realizations, low=1, high=MAX_REALIZATIONS)
-    checks.count("--validate-realizations", args.validate_realizations, low=0)
-    if args.finalists is not None:  # an explicit value: at most one per particle
-        checks.count("--finalists", args.finalists, low=1, high=args.particles)
-    checks.count(
-        "--finalist-realizations", args.finalist_realizations, low=1, high=MAX_REALIZATIONS
-    )
+    if args.particles is not None:
+        checks.count("--particles", args.particles, low=2, high=MAX_PARTICLES)
+    if args.iterations is not None:
+        checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
+    checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
+    checks.count("--finalists", args.finalists, low=1, high=1000)
+    checks.count("--finalist-draws", args.finalist_draws, low=1, high=MAX_REALIZATIONS)
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
     if args.scheduler and args.workers > 0:
         raise ValueError("--scheduler and --workers: choose one")
     if args.eval_timeout is not None:
         checks.real("--eval-timeout", args.eval_timeout, low=0.0, low_open=True, unit="s")
-    if args.search_starts is not None:
-        checks.count("--search-starts", args.search_starts, low=0, high=10_000)
-    if args.search_spacing is not None:
-        checks.real("--search-spacing", args.search_spacing, low=0.0, low_open=True, unit="m")
-    if args.search_realizations is not None:
-        checks.count("--search-realizations", args.search_realizations, low=1, high=100)
+    checks.real("--mount-tolerance", args.mount_tolerance, low=0.0, high=1.0, unit="m")
+    search = _search_options(args)
     M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
-    if not args.no_seeds:
-        n = len(candidate_grid(room, DEFAULT_SPACING))
+    if not args.no_seeds and args.cost != "peb":
+        n = len(candidate_grid(room, search.spacing))
+        if n > MAX_SEARCH_CANDIDATES:
+            raise ValueError(
+                f"--search-spacing: {search.spacing:g} m gives {n} candidate points, more "
+                f"than {MAX_SEARCH_CANDIDATES}; use a larger spacing"
+            )
         if M > n:
             raise ValueError(
-                f"--anchors: {M} anchors exceed the {n} candidate points of the seeds' "
-                f"relaxation in this room; use at most {n} or --no-seeds"
+                f"--anchors: {M} anchors exceed the {n} candidate points of the search "
+                f"(--search-spacing {search.spacing:g} m) in this room"
             )
-        if args.cost != "peb" and args.search_starts != 0:
-            spacing = 0.6 if args.search_spacing is None else args.search_spacing
-            try:
-                n = len(candidate_grid(room, spacing))
-            except ValueError as exc:
-                raise ValueError(f"--search-{exc}") from None
-            if n > MAX_SEARCH_CANDIDATES:
-                raise ValueError(
-                    f"--search-spacing: {spacing:g} m gives {n} candidate points, more than "
-                    f"{MAX_SEARCH_CANDIDATES}; use a larger spacing"
-                )
-            if M > n:
-                raise ValueError(
-                    f"--anchors: {M} anchors exceed the {n} candidate points of the seed "
-                    f"search (--search-spacing {spacing:g} m)"
-                )
     checks.check_size(
         "--validate-realizations",
         args.validate_realizations * len(room.grid()) * M * BYTES_PER_RANGE,
@@ -187,47 +177,40 @@ def _check_args(args, room) -> None:
                 "it is resumed if it was written by this same command",
                 flush=True,
             )
+    return search
 
 
 def run(args) -> int:
-    from numpy import array_equal as np_equal
-
     from placement.plan import seed_then_pso
     from placement.pso import default_eval_timeout
 
     out = output_dir("--out", args.out)
     room = load_room(args.room)
-    _check_args(args, room)
+    search = _check_args(args, room)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
+        workers = args.workers or available_cores()
         print(
             f"planning {args.anchors} anchors in {room.name} "
             f"({room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m), cost {args.cost}, "
-            f"{args.particles} particles x {args.iterations} iterations, seed {args.seed}",
+            f"seed {args.seed}, {workers if executor is not None else 1} worker(s)",
             flush=True,
         )
         with default_eval_timeout(args.eval_timeout):
             res = seed_then_pso(
                 room,
                 args.anchors,
+                cost=args.cost,
+                seeds=None if args.no_seeds else "auto",
+                search=search,
                 particles=args.particles,
                 iterations=args.iterations,
-                cost=args.cost,
-                realizations=args.realizations,
-                seeds=None if args.no_seeds else "auto",
-                search={
-                    key: value
-                    for key, value in (
-                        ("starts", args.search_starts),
-                        ("realizations", args.search_realizations),
-                        ("spacing", args.search_spacing),
-                    )
-                    if value is not None  # unset: the library's default
-                },
-                finalists=4 if args.finalists is None else args.finalists,
-                finalist_realizations=args.finalist_realizations,
+                mount_tolerance=args.mount_tolerance,
+                finalists=args.finalists,
+                finalist_draws=args.finalist_draws,
                 executor=executor,
+                workers=workers if executor is not None else 1,
                 seed=args.seed,
                 progress=not args.no_progress,
                 checkpoint=args.checkpoint,
@@ -236,13 +219,27 @@ def run(args) -> int:
     out.mkdir(parents=True, exist_ok=True)
     (out / "result.json").write_text(res.to_json(indent=1) + "\n")
     write_json(out / "layout.json", {"anchors": res.anchors})
+    _print_result(res, args)
+    print(
+        f"wrote {out / 'result.json'} and {out / 'layout.json'} ({time.perf_counter() - t0:.1f} s)"
+    )
+    return 0
+
+
+def _print_result(res, args) -> None:
+    from numpy import array_equal
+
+    search = res.settings.get("seed_search") or {}
+    if search.get("resumed"):
+        print(f"search: resumed from {args.checkpoint}.search.json")
     for s in res.seeds:
-        print(f"  seed {s.name:<22} mean PEB {s.mean_peb:.4f} m   cost {s.cost:.4g}")
+        table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
+        print(f"  seed {s.name:<12} swarm cost {s.cost:.4g}{table}")
     swarm = res.pso
     extra = {} if swarm is None else swarm.extra
     if extra.get("resumed_from") is not None:
         print(f"resumed from checkpoint {args.checkpoint} after iteration {extra['resumed_from']}")
-    print(f"PSO: {res.nit} iterations, {res.nfev} evaluations, {res.message}")
+    print(f"swarm: {res.nit} iterations, {res.nfev} evaluations, {res.message}")
     if swarm is not None and swarm.failures:
         print(
             f"  {swarm.failures} evaluation(s) failed and cost inf: "
@@ -250,24 +247,49 @@ def run(args) -> int:
             f"{extra.get('timeouts', 0)} over --eval-timeout, "
             f"{swarm.failures - extra.get('lost', 0) - extra.get('timeouts', 0)} errors"
         )
-    for k, f in enumerate(res.finalists):
-        mark = "*" if np_equal(f["anchors"], res.anchors) else " "
+    for f in res.finalists:
+        mark = "*" if array_equal(f["anchors"], res.anchors) else " "
         print(
-            f" {mark}finalist {k + 1}: PSO cost {f['pso_cost']:.4g}, "
-            f"re-scored {f['cost']:.4g} over {args.finalist_realizations} realizations"
+            f" {mark}finalist {f['source']:<10} swarm cost {f['pso_cost']:.4g}, "
+            f"fresh draws {f['cost']:.4g}"
         )
-    print(f"chosen layout: {res.cost_name} cost {res.cost:.4g} in the swarm")
     print("anchors (m):")
     for a in res.anchors:
         print(f"  {a[0]:7.3f} {a[1]:7.3f} {a[2]:7.3f}")
-    v = res.validation
-    if v:
-        print(
-            f"validation over {v['realizations']} realizations: sigma {v['std']:.3f} m, "
-            f"mean {v['mean']:.3f} m, P95 {v['p95']:.3f} m; "
-            f"mean PEB {v['mean_peb']:.4f} m (sqrt tr CRLB, sigma_r 0.04 m)"
-        )
+    _print_validation(res.validation)
+    _print_phases(res)
+
+
+def _print_validation(v: dict) -> None:
+    if not v:
+        return
     print(
-        f"wrote {out / 'result.json'} and {out / 'layout.json'} ({time.perf_counter() - t0:.1f} s)"
+        f"validation, {v['realizations']} realizations at the {len(v['per_node']['rmse'])} "
+        f"nodes: sigma {v['std']:.3f} m, mean {v['mean']:.3f} m, P95 {v['p95']:.3f} m"
     )
-    return 0
+    h = v.get("held_out")
+    if h:
+        for key, what in (("grid", "held-out grid"), ("random", "random points")):
+            d = h[key]
+            print(
+                f"  {what} ({d['nodes']} nodes): sigma {d['std']:.3f} m, mean {d['mean']:.3f} m, "
+                f"P95 {d['p95']:.3f} m"
+            )
+    m = v.get("mounting")
+    if m:
+        print(
+            f"  mounting error <= {100 * m['tolerance_m']:g} cm ({m['draws']} draws): "
+            f"sigma {m['std']:.3f} m, mean {m['mean']:.3f} m, P95 {m['p95']:.3f} m"
+        )
+
+
+def _print_phases(res) -> None:
+    nfev = res.settings.get("nfev_by_phase", {})
+    what = {"search": "table layouts", "pso": "simulations", "finalists": "draw simulations"}
+    parts = []
+    for phase, seconds in res.timings.items():
+        if phase == "total":
+            continue
+        n = f" ({nfev[phase]} {what.get(phase, 'evaluations')})" if phase in nfev else ""
+        parts.append(f"{phase} {seconds:.1f} s{n}")
+    print("phases: " + ", ".join(parts) + f"; total {res.timings['total']:.1f} s")

@@ -1,0 +1,299 @@
+"""Range tables: simulated ranges of every candidate mounting point at every node.
+
+Anchors transmit one at a time and each anchor's noise level is set by its own reference
+node (docs/model.md, "Noise"), so the range that a node measures from an anchor depends on
+that anchor, that node and the noise only, never on the other anchors. Simulating every
+candidate point against every node once therefore gives the exact simulated ranges of
+every layout built from the candidates, and scoring such a layout costs only the
+least-squares positioning (docs/model.md, "Range-table search").
+
+A table holds D *draws* of the scene. Draw d has its own node set (P nodes), its own
+mounting error of every candidate and its own receiver noise:
+
+- the first ``exact_draws`` draws use the given nodes and the candidates exactly where
+  they are planned;
+- the other draws move every node uniformly within its grid cell and mount every
+  candidate at a random in-plane offset of at most ``mount_tolerance`` from its planned
+  point. The position solver still uses the planned points, as an installed system
+  would.
+
+Scored over all draws, a layout is good where the tags will be and as it will be
+mounted, not only at one fixed set of nodes (docs/model.md, "Robust cost").
+
+Randomness: draw d's nodes come from ``SeedSequence(seed, spawn_key=(3, d))``; candidate
+j's offset in draw d from ``(2, j, d)`` and its noise from ``(0, j, d)``. The table does
+not depend on chunking or on the executor, and :func:`extend_table` adds columns that
+are exactly those a bigger table would have had.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from concurrent.futures import Executor
+from dataclasses import dataclass
+
+import numpy as np
+
+from placement.costs import SIMULATED_STATISTICS
+from placement.surfaces import mounting_surfaces, project, surface_index
+from simulation import checks
+from simulation.room import Room
+
+
+@dataclass(frozen=True)
+class RangeTable:
+    """Simulated ranges of N candidate anchors at the nodes of D draws.
+
+    candidates (N, 3) planned points (m); nodes (D, P, 3) the nodes of each draw (m);
+    ranges (D, P, N) estimated ranges (m); distances (D, P, N) true ranges from the
+    mounted points (m); region (lo (3,), hi (3,)) the room box where positioning starts.
+    seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
+    """
+
+    candidates: np.ndarray
+    nodes: np.ndarray
+    ranges: np.ndarray
+    distances: np.ndarray
+    region: tuple[np.ndarray, np.ndarray]
+    seed: int
+    mount_tolerance: float
+    exact_draws: int
+    precision: str
+
+    @property
+    def draws(self) -> int:
+        """D, the number of draws."""
+        return int(self.nodes.shape[0])
+
+    @property
+    def windows(self) -> int:
+        """Received windows simulated for the table (D · P · N)."""
+        return int(self.ranges.size)
+
+
+def _stream(seed: int, *key: int) -> np.random.Generator:
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
+
+
+def cell_size(nodes: np.ndarray) -> np.ndarray:
+    """(3,) the spacing of a node grid along each axis (0 where all nodes share a value)."""
+    out = np.zeros(3)
+    for k in range(3):
+        u = np.unique(np.round(nodes[:, k], 9))
+        if len(u) > 1:
+            out[k] = float(np.min(np.diff(u)))
+    return out
+
+
+def node_region(room: Room, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(P, 3) lower and upper bounds each node may move within: the room less its node
+    margin, intersected with the tag zone holding the node when the room has zones."""
+    lo = np.broadcast_to(np.full(3, room.node_margin), nodes.shape).copy()
+    hi = np.broadcast_to(np.asarray(room.size) - room.node_margin, nodes.shape).copy()
+    if room.zones:
+        owner = np.full(len(nodes), -1)
+        for k, (zlo, zhi) in enumerate(room.zones):
+            inside = np.all(
+                (nodes >= np.asarray(zlo) - 1e-9) & (nodes <= np.asarray(zhi) + 1e-9), 1
+            )
+            owner[(owner < 0) & inside] = k
+        for k, (zlo, zhi) in enumerate(room.zones):
+            rows = owner == k
+            lo[rows] = np.maximum(lo[rows], zlo)
+            hi[rows] = np.minimum(hi[rows], zhi)
+    return lo, hi
+
+
+def node_draws(room: Room, nodes, draws: int, exact_draws: int, seed: int) -> np.ndarray:
+    """(D, P, 3) node sets: the first ``exact_draws`` are ``nodes`` (P, 3); in the others
+    every node moves uniformly within ±½ grid cell on each axis (:func:`cell_size`),
+    staying in its region (:func:`node_region`)."""
+    p = np.asarray(nodes, dtype=float)
+    half = cell_size(p) / 2
+    lo, hi = node_region(room, p)
+    out = np.empty((draws, *p.shape))
+    for d in range(draws):
+        if d < exact_draws:
+            out[d] = p
+        else:
+            move = _stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
+            out[d] = np.clip(p + move, lo, hi)
+    return out
+
+
+def mounted_points(
+    room: Room, candidates, ids, draw: int, tolerance: float, exact: bool, seed: int
+) -> np.ndarray:
+    """(n, 3) where candidates (n, 3) with table indices ``ids`` end up in ``draw``: the
+    planned point moved in its surface plane by a uniform offset within a disc of radius
+    ``tolerance`` (m), projected back onto the mounting surfaces; unchanged when ``exact``."""
+    c = np.asarray(candidates, dtype=float)
+    if exact or tolerance == 0:
+        return c.copy()
+    surfs = mounting_surfaces(room)
+    index = surface_index(room, c)
+    out = c.copy()
+    for row, (j, s) in enumerate(zip(ids, index, strict=True)):
+        u1, u2 = _stream(seed, 2, int(j), draw).random(2)
+        radius, angle = tolerance * np.sqrt(u1), 2 * np.pi * u2
+        uv = surfs[int(s)].uv_axes if s >= 0 else (0, 1)
+        out[row, uv[0]] += radius * np.cos(angle)
+        out[row, uv[1]] += radius * np.sin(angle)
+    return project(room, out)
+
+
+def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(D, P, n) ranges and (D, P, n) true distances of candidates (n, 3), indices ids."""
+    from simulation.evaluation import RangingScene
+
+    D, P, _ = nodes.shape
+    ranges = np.empty((D, P, len(ids)))
+    dist = np.empty((D, P, len(ids)))
+    exact_scene = None  # exact draws share nodes and points: one noise-free scene
+    for d in range(D):
+        exact = d < spec["exact_draws"]
+        mounted = mounted_points(
+            room, candidates, ids, d, spec["mount_tolerance"], exact, spec["seed"]
+        )
+        if exact and exact_scene is not None:
+            scene = exact_scene
+        else:
+            scene = RangingScene(room, mounted, nodes[d], precision=spec["precision"])
+            exact_scene = scene if exact else None
+        noise = np.stack(
+            [
+                s * _stream(spec["seed"], 0, int(j), d).standard_normal(scene.windows.shape[::2])
+                for s, j in zip(scene.noise_sigma, ids, strict=True)
+            ],
+            axis=1,
+        )
+        ranges[d] = scene.dsp.ranges(scene.windows + noise, room.speed_of_sound)
+        dist[d] = np.linalg.norm(nodes[d][:, None, :] - mounted[None], axis=-1)
+    return ranges, dist
+
+
+def _simulate(room, candidates, first_id: int, nodes, spec, executor, chunk, progress=None):
+    ids = np.arange(first_id, first_id + len(candidates))
+    args = [
+        (room, candidates[i : i + chunk], ids[i : i + chunk], nodes, spec)
+        for i in range(0, len(candidates), chunk)
+    ]
+    if executor is None:
+        pending = [_Now(_columns, a) for a in args]
+    else:
+        pending = [executor.submit(_columns, *a) for a in args]
+    parts = []
+    for k, fut in enumerate(pending):
+        parts.append(fut.result())
+        if progress:
+            progress(k + 1, len(pending))
+    return np.concatenate([p[0] for p in parts], axis=2), np.concatenate(
+        [p[1] for p in parts], axis=2
+    )
+
+
+class _Now:
+    """A future-like wrapper that runs ``fn(*args)`` when its result is asked for."""
+
+    def __init__(self, fn, args):
+        self.fn, self.args = fn, args
+
+    def result(self):
+        return self.fn(*self.args)
+
+
+def range_table(
+    room: Room,
+    candidates,
+    nodes=None,
+    *,
+    draws: int = 1,
+    exact_draws: int = 1,
+    mount_tolerance: float = 0.0,
+    seed: int = 0,
+    executor: Executor | None = None,
+    chunk: int = 16,
+    precision: str = "float32",
+    progress=None,
+) -> RangeTable:
+    """Simulate every candidate (N, 3) at the nodes of ``draws`` draws (see the module).
+
+    nodes : (P, 3) the nodes of the exact draws (default ``room.grid()``), or (D, P, 3)
+        explicit node sets (then ``draws`` is D).
+    exact_draws : how many draws keep the nodes and the planned points exactly.
+    mount_tolerance : radius (m) of the in-plane mounting error in the other draws.
+    chunk : candidates simulated per task (memory ≈ chunk · P · 192 · 16 bytes).
+    precision : the receiver DSP's precision (see :class:`simulation.receiver.Dsp`).
+    progress : an optional callable ``progress(done, total)`` called as chunks finish.
+    """
+    cand = room.check_anchors(candidates, min_anchors=1)
+    nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
+    if nodes.ndim == 2:
+        nodes = node_draws(room, nodes, int(draws), int(exact_draws), int(seed))
+    spec = {
+        "exact_draws": int(exact_draws),
+        "mount_tolerance": float(mount_tolerance),
+        "seed": int(seed),
+        "precision": precision,
+    }
+    ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, int(chunk), progress)
+    region = (np.zeros(3), np.asarray(room.size, dtype=float))
+    return RangeTable(cand, nodes, ranges, dist, region, **spec)
+
+
+def extend_table(
+    room: Room,
+    table: RangeTable,
+    candidates,
+    *,
+    executor: Executor | None = None,
+    chunk: int = 16,
+) -> RangeTable:
+    """The table with columns for more candidates (n, 3) appended (indices N … N + n − 1),
+    simulated on the same draws: equal to building the bigger table at once."""
+    new = room.check_anchors(candidates, min_anchors=1)
+    spec = {
+        "exact_draws": table.exact_draws,
+        "mount_tolerance": table.mount_tolerance,
+        "seed": table.seed,
+        "precision": table.precision,
+    }
+    ranges, dist = _simulate(
+        room, new, len(table.candidates), table.nodes, spec, executor, int(chunk)
+    )
+    return dataclasses.replace(
+        table,
+        candidates=np.concatenate([table.candidates, new]),
+        ranges=np.concatenate([table.ranges, ranges], axis=2),
+        distances=np.concatenate([table.distances, dist], axis=2),
+    )
+
+
+def table_errors(table: RangeTable, layouts) -> np.ndarray:
+    """(L, D·P) Euclidean position errors (m) of layouts of candidates ``layouts`` (L, M)
+    indices over every draw and node of the table, positioned in one batch."""
+    from simulation.positioning import locate
+
+    S = np.asarray(layouts, dtype=int)
+    ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
+    x = locate(table.candidates[S], ranges, region=table.region)
+    return np.linalg.norm(x - table.nodes, axis=-1).reshape(len(S), -1)
+
+
+def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
+    """(L,) the simulated ``statistic`` of each layout's errors over all D · P table
+    entries (:func:`table_errors`); +inf for a layout where some fix is not finite or
+    whose anchors are collinear."""
+    S = np.asarray(layouts, dtype=int)
+    e = table_errors(table, S)
+    stat = SIMULATED_STATISTICS[statistic]
+    # collinear or coincident anchors leave the position undetermined: never a solution
+    fixed = checks.anchor_rank(table.candidates[S]) >= 2
+    rows = zip(e, np.atleast_1d(fixed), strict=True)
+    return np.array([stat(r) if ok and np.all(np.isfinite(r)) else math.inf for r, ok in rows])
+
+
+def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:
+    """:func:`table_costs` of the one layout made of the candidates ``indices`` (M,)."""
+    return float(table_costs(table, np.asarray(indices)[None], statistic)[0])

@@ -1,0 +1,236 @@
+"""Validation of a planned layout: the paper's statistics and whether they hold where the
+tags will be and as the anchors will be mounted (docs/model.md, "Validation").
+
+Three checks, each with its own independent noise:
+
+- **grid**: the Euclidean error at the evaluation nodes (``room.grid()``, the paper's 270
+  nodes in techtile) over many noise realizations: σ, mean, P95 as in the paper's Table I;
+- **held-out nodes**: nodes the optimizer never scored: a regular grid with one more node
+  per axis than the evaluation grid (techtile: 10 × 7 × 6 = 420 nodes; with tag zones,
+  the zones gridded at 0.8 × their spacing) and uniform random points in the node region
+  (in the zones when the room has zones);
+- **mounting error**: the anchors mounted at a random in-plane offset within
+  ``mount_tolerance`` of their planned points (several draws), positions solved with the
+  planned points as an installed system would.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from analysis.fim import peb
+from analysis.statistics import dop
+from placement.rangetable import mounted_points, node_region
+from simulation import checks
+from simulation.room import Room
+
+
+@dataclass(frozen=True)
+class ValidationOptions:
+    """How a planned layout is validated (:func:`validate_layout`).
+
+    realizations : noise realizations at the evaluation nodes (the paper: 100; 0 skips
+        the whole validation).
+    held_out_realizations : noise realizations at the held-out nodes (0: skip them).
+    random_nodes : uniform random held-out points.
+    mount_draws : mounting-error draws at the evaluation nodes (0: skip).
+    precision : the receiver DSP's precision.
+    """
+
+    realizations: int = 100
+    held_out_realizations: int = 10
+    random_nodes: int = 300
+    mount_draws: int = 10
+    precision: str = "float32"
+
+    def __post_init__(self) -> None:
+        checks.count("realizations", self.realizations, low=0, high=100_000)
+        checks.count("held_out_realizations", self.held_out_realizations, low=0, high=10_000)
+        checks.count("random_nodes", self.random_nodes, low=1, high=100_000)
+        checks.count("mount_draws", self.mount_draws, low=0, high=10_000)
+        checks.choice("precision", self.precision, ("float64", "float32"))
+
+
+def summary(errors) -> dict[str, float]:
+    """σ (population), mean, P95 and RMS (m) of Euclidean errors, and how many."""
+    e = np.asarray(errors, dtype=float).ravel()
+    return {
+        "std": float(np.std(e)),
+        "mean": float(np.mean(e)),
+        "p95": float(np.percentile(e, 95)),
+        "rms": float(np.sqrt(np.mean(e * e))),
+        "n": int(e.size),
+    }
+
+
+def held_out_grid(room: Room) -> np.ndarray:
+    """(P', 3) held-out regular nodes: one more node per axis than the default grid, or
+    the tag zones gridded at 0.8 × ``zone_spacing``."""
+    if not room.zones:
+        return room.grid((10, 7, 6))
+    import dataclasses
+
+    finer = dataclasses.replace(room, zone_spacing=0.8 * room.zone_spacing)
+    return finer.grid()
+
+
+def random_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, 3) uniform random points in the node region: the room less its node margin, or
+    the tag zones (chosen in proportion to their volume) within it."""
+    lo = np.full(3, room.node_margin)
+    hi = np.asarray(room.size) - room.node_margin
+    if not room.zones:
+        return rng.uniform(lo, hi, (n, 3))
+    boxes = [(np.maximum(lo, z0), np.minimum(hi, z1)) for z0, z1 in room.zones]
+    vol = np.array([np.prod(np.maximum(b - a, 0)) for a, b in boxes])
+    pick = rng.choice(len(boxes), n, p=vol / vol.sum() if vol.sum() > 0 else None)
+    out = np.empty((n, 3))
+    for k, (a, b) in enumerate(boxes):
+        rows = pick == k
+        out[rows] = rng.uniform(a, b, (int(rows.sum()), 3))
+    return out
+
+
+def _evaluate(room, anchors, nodes, realizations, seed, precision):
+    from simulation.evaluation import evaluate_layout
+
+    return evaluate_layout(
+        room, anchors, realizations=realizations, seed=seed, nodes=nodes, precision=precision
+    )
+
+
+def _mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision) -> np.ndarray:
+    """(P,) errors when the anchors are mounted as in draw ``draw`` (one noise draw)."""
+    from simulation.evaluation import RangingScene
+    from simulation.positioning import locate
+
+    ids = np.arange(len(anchors))
+    mounted = mounted_points(room, anchors, ids, draw, tolerance, False, seed)
+    scene = RangingScene(room, mounted, nodes, precision=precision)
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7, draw)))
+    x = locate(anchors, scene.ranges(rng), region=(np.zeros(3), np.asarray(room.size, float)))
+    return np.linalg.norm(x - nodes, axis=-1)
+
+
+def _submit(executor, fn, *args):
+    if executor is None:
+        return _Lazy(fn, args)
+    return executor.submit(fn, *args)
+
+
+class _Lazy:
+    """Runs ``fn(*args)`` the first time its result is asked for (serial runs)."""
+
+    def __init__(self, fn, args):
+        self.fn, self.args, self.done, self.value = fn, args, False, None
+
+    def result(self):
+        if not self.done:
+            self.value, self.done = self.fn(*self.args), True
+        return self.value
+
+
+def _wait(jobs: dict, progress) -> None:
+    """Wait for every job, reporting (done, total) to ``progress``."""
+    flat = [j for v in jobs.values() for j in (v if isinstance(v, list) else [v])]
+    for k, job in enumerate(flat):
+        job.result()
+        if progress:
+            progress(k + 1, len(flat))
+
+
+def validate_layout(
+    room: Room,
+    anchors,
+    *,
+    seed: int,
+    options: ValidationOptions | None = None,
+    mount_tolerance: float = 0.03,
+    nodes=None,
+    sigma: float = 0.04,
+    executor: Executor | None = None,
+    progress=None,
+) -> dict[str, Any]:
+    """The three checks of the module docstring for anchors (M, 3), as a plain dict.
+
+    Keys: ``realizations``, ``seed``, ``std``, ``mean``, ``p95``, ``rms`` (m, the grid
+    check over all R · P errors), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
+    ``per_node`` (RMSE and RMS-based DOP per node), ``errors`` (R, P); ``held_out``
+    with ``grid`` and ``random`` summaries; ``mounting`` with its summary. Each check
+    draws its noise from its own stream of ``seed``. Checks run on ``executor`` when
+    given; the result does not depend on it. ``progress(done, total)`` is called as the
+    checks' parts finish.
+    """
+    opt = options or ValidationOptions()
+    a = np.asarray(anchors, dtype=float)
+    nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
+    out: dict[str, Any] = {}
+    if opt.realizations == 0:
+        return out
+    child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
+    # the grid check in two halves, each with its own stream, to keep two workers busy
+    halves = [opt.realizations - opt.realizations // 2, opt.realizations // 2]
+    streams = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
+    jobs: dict[str, Any] = {
+        "grid": [
+            _submit(executor, _evaluate, room, a, nodes, R, s, opt.precision)
+            for R, s in zip(halves, streams, strict=True)
+            if R > 0
+        ]
+    }
+    if opt.held_out_realizations:
+        R = opt.held_out_realizations
+        rnd = random_nodes(room, opt.random_nodes, np.random.default_rng(child[1]))
+        jobs["held_grid"] = _submit(
+            executor, _evaluate, room, a, held_out_grid(room), R, child[2], opt.precision
+        )
+        jobs["held_random"] = _submit(executor, _evaluate, room, a, rnd, R, child[3], opt.precision)
+    if opt.mount_draws and mount_tolerance > 0:
+        jobs["mounting"] = [
+            _submit(executor, _mounted_errors, room, a, nodes, mount_tolerance, d, child[0],
+                    opt.precision)
+            for d in range(opt.mount_draws)
+        ]  # fmt: skip
+    _wait(jobs, progress)
+    parts = [j.result() for j in jobs["grid"]]
+    e = np.concatenate([p.errors for p in parts])
+    range_errors = np.concatenate([p.range_errors for p in parts])
+    out.update(
+        {
+            "realizations": int(opt.realizations),
+            "seed": int(seed),
+            **{k: v for k, v in summary(e).items() if k != "n"},
+            "mean_peb": float(np.mean(peb(a, nodes, sigma))),
+            "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
+            "per_node": {
+                "rmse": np.sqrt(np.mean(e * e, axis=0)).tolist(),
+                "dop": dop(e, range_errors).tolist(),
+            },
+            "errors": np.round(e, 6).tolist(),
+        }
+    )
+    if "held_grid" in jobs:
+        g, r = jobs["held_grid"].result(), jobs["held_random"].result()
+        out["held_out"] = {
+            "realizations": int(opt.held_out_realizations),
+            "grid": {**summary(g.errors), "nodes": int(len(g.nodes))},
+            "random": {**summary(r.errors), "nodes": int(len(r.nodes))},
+        }
+    if "mounting" in jobs:
+        errs = np.concatenate([j.result() for j in jobs["mounting"]])
+        out["mounting"] = {
+            "tolerance_m": float(mount_tolerance),
+            "draws": int(opt.mount_draws),
+            **summary(errs),
+        }
+    if not math.isfinite(out["std"]):
+        out["message"] = "some position errors are not finite"
+    return out
+
+
+__all__ = ["ValidationOptions", "held_out_grid", "node_region", "random_nodes", "validate_layout"]
