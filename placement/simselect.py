@@ -25,6 +25,7 @@ results do not depend on the executor or the number of workers.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from concurrent.futures import Executor
@@ -195,6 +196,8 @@ class SearchOptions:
         many, how many keep the nodes and planned points exactly, and the radius (m) of
         the mounting error in the others.
     chains : independent stochastic searches, each from its own start.
+    chain_draws : the first draws the chains score layouts on (fewer is faster); the
+        finishing descents and the fine lattices use every draw.
     random_starts : random layouts scored to pick each chain's start (the best is used).
     neighbours : the swap neighbourhood: this many nearest candidates of an anchor.
     batch : swaps sampled from the neighbourhood and scored together at each step.
@@ -212,6 +215,7 @@ class SearchOptions:
     exact_draws: int = 1
     mount_tolerance: float = 0.03
     chains: int = 2
+    chain_draws: int = 1
     random_starts: int = 30
     neighbours: int = 48
     batch: int = 24
@@ -229,6 +233,7 @@ class SearchOptions:
         checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
         checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
         checks.count("chains", self.chains, low=1, high=10_000)
+        checks.count("chain_draws", self.chain_draws, low=1, high=self.draws)
         checks.count("random_starts", self.random_starts, low=1, high=100_000)
         checks.count("neighbours", self.neighbours, low=1, high=10_000)
         checks.count("batch", self.batch, low=1, high=self.neighbours)
@@ -241,6 +246,18 @@ class SearchOptions:
         checks.count("fine_optima", self.fine_optima, low=1, high=1000)
         checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
+
+
+def first_draws(table: RangeTable, n: int) -> RangeTable:
+    """A view of the table holding its first ``n`` draws only (all when n ≥ D)."""
+    n = min(int(n), table.draws)
+    return dataclasses.replace(
+        table,
+        nodes=table.nodes[:n],
+        ranges=table.ranges[:n],
+        distances=table.distances[:n],
+        exact_draws=min(table.exact_draws, n),
+    )
 
 
 def _stream(seed: int, *key: int) -> np.random.Generator:
@@ -264,11 +281,13 @@ def _advance(table, statistic, nbr, opt, chains, until):
 
 
 def _finish(table, statistic, nbr, chains, seed):
-    """The finishing descent of each chain's best layout; [(S, cost, local, n)]."""
+    """The finishing descent of each chain's best layout on the whole table;
+    [(S, cost, local, n)]."""
     out = []
     for k, c in chains:
         score = _Scorer(table, statistic, 10**9)
-        S, f, local = descend(c.best, c.fbest, nbr, score, _stream(seed, 11, k))
+        f = float(score([c.best])[0])
+        S, f, local = descend(c.best, f, nbr, score, _stream(seed, 11, k))
         out.append((np.sort(S), f, local, c.nfev + score.nfev))
     return out
 
@@ -309,14 +328,15 @@ SEGMENTS = 8
 def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress):
     """Start, advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
     ``workers`` jobs; [(S, cost, local, evaluations)] per chain."""
+    view = first_draws(table, opt.chain_draws)
     chains = [
-        Chain.start(table, M, statistic, opt.random_starts, _stream(seed, 10, k))
+        Chain.start(view, M, statistic, opt.random_starts, _stream(seed, 10, k))
         for k in range(opt.chains)
     ]
     parts = _split(list(range(opt.chains)), max(1, workers))
     for seg in range(1, SEGMENTS + 1):
         until = opt.evaluations * seg // SEGMENTS
-        jobs = [(table, statistic, nbr, opt, [chains[k] for k in ks], until) for ks in parts]
+        jobs = [(view, statistic, nbr, opt, [chains[k] for k in ks], until) for ks in parts]
         for ks, done in zip(parts, _map(executor, _advance, jobs), strict=True):
             for k, c in zip(ks, done, strict=True):
                 chains[k] = c
