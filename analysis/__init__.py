@@ -13,19 +13,22 @@ from analysis.noise import (
     direct_amplitude,
 )
 from analysis.statistics import (
-    ErrorStats,
     axis_errors,
     dop,
+    dop_rms,
     ecdf,
     error_stats,
     euclidean_errors,
+    node_mean,
+    node_rmse,
+    node_std,
+    range_std,
 )
 
 __all__ = [
     "CalibratedRangeNoise",
     "ConstantRangeNoise",
     "MultipathRangeNoise",
-    "ErrorStats",
     "PhysicalRangeNoise",
     "axis_errors",
     "calibrated_sigma",
@@ -33,10 +36,15 @@ __all__ = [
     "crlb_trace",
     "direct_amplitude",
     "dop",
+    "dop_rms",
     "ecdf",
     "error_stats",
     "euclidean_errors",
     "fim",
     "gdop",
+    "node_mean",
+    "node_rmse",
+    "node_std",
     "peb",
+    "range_std",
 ]

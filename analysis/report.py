@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from analysis.statistics import error_stats
+from analysis.statistics import error_stats, node_rmse
 from simulation.room import SURFACES, Room
 
 logger = logging.getLogger(__name__)
@@ -135,23 +135,13 @@ def _array(x, name: str, ndim: int | None = None) -> np.ndarray:
     return a
 
 
-def _node_rmse(errors: np.ndarray) -> np.ndarray:
-    """(P,) RMS over realizations of the finite errors; +inf for a node with none."""
-    ok = np.isfinite(errors)
-    n = ok.sum(axis=0)
-    s = np.where(ok, errors, 0.0) ** 2
-    out = np.full(errors.shape[1], np.inf)
-    np.divide(s.sum(axis=0), n, out=out, where=n > 0)
-    return np.sqrt(out)
-
-
 def _stats_from(src: dict | None, errors: np.ndarray | None) -> dict[str, float]:
     keys = ("std", "mean", "p95", "rms")
     if src and all(isinstance(src.get(k), int | float) for k in keys):
         return {k: float(src[k]) for k in keys}
     if errors is not None:
         s = error_stats(errors)
-        return {k: getattr(s, k) for k in keys}
+        return {k: s[k] for k in keys}
     return {k: math.nan for k in keys}
 
 
@@ -165,7 +155,7 @@ def _sim_from_json(block: dict, per_node: dict | None, P: int, R: int | None, so
     rmse = per_node.get("rmse")
     rmse = _array(rmse, f"{source} per_node.rmse", 1) if rmse is not None else None
     if rmse is None and e is not None:
-        rmse = _node_rmse(e)
+        rmse = node_rmse(e)
     if rmse is None:
         return None
     dop = per_node.get("dop")
@@ -326,7 +316,7 @@ def build_report(
                 notes.append(f"{e.name}: not simulated ({exc}).")
                 continue
             t = time.perf_counter()
-            ev = evaluate(room, e.anchors, realizations=int(realizations), seed=seed, nodes=nodes)
+            ev = evaluate(room, e.anchors, realizations=int(realizations), rng=seed, nodes=nodes)
             e.fresh = _sim_from_evaluation(ev, f"simulated for this report (R = {realizations})")
             if e.sim is None:
                 e.sim = e.fresh

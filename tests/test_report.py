@@ -71,9 +71,9 @@ def check_html(text: str) -> Checker:
     return c
 
 
-def fake_evaluate(room, anchors, realizations=1, seed=0, nodes=None, **kw):
+def fake_evaluate(room, anchors, realizations=1, rng=0, nodes=None, **kw):
     """A fast stand-in with the shapes of simulation.Evaluation (synthetic errors)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(rng)
     nodes = room.grid() if nodes is None else nodes
     R, P, M = realizations, len(nodes), len(anchors)
     est = nodes + rng.normal(0, 0.3, (R, P, 3))
@@ -175,7 +175,7 @@ def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch)
 
 def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
     monkeypatch.setattr(rp, "_evaluator", lambda: None)
-    ev = fake_evaluate(ROOM, OPT, realizations=3, seed=1)
+    ev = fake_evaluate(ROOM, OPT, realizations=3, rng=1)
     data = {
         "room": ROOM.to_dict(),
         "anchors": OPT.tolist(),
@@ -198,7 +198,7 @@ def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
 
 def test_report_merges_the_same_layout_from_both_files(tmp_path):
     write_result(tmp_path)
-    ev = fake_evaluate(ROOM, OPT, realizations=9, seed=2)
+    ev = fake_evaluate(ROOM, OPT, realizations=9, rng=2)
     (tmp_path / "evaluation.json").write_text(
         json.dumps(
             {
@@ -243,8 +243,8 @@ def test_cli_report_with_the_real_simulator(tmp_path, capsys):
 
 
 def test_report_with_one_realization_skips_the_dop_map(tmp_path, monkeypatch):
-    def one(room, anchors, realizations=1, seed=0, nodes=None, **kw):
-        ev = fake_evaluate(room, anchors, realizations, seed, nodes)
+    def one(room, anchors, realizations=1, rng=0, nodes=None, **kw):
+        ev = fake_evaluate(room, anchors, realizations, rng, nodes)
         assert np.all(np.isinf(ev.dop))  # σ_r = 0 with one realization
         return ev
 
