@@ -3,7 +3,7 @@
 Selecting anchors is a Boolean design problem: w ∈ {0, 1}^N, Σ w = M, with the FIM at
 node p affine in w, J_p(w) = Σ_n w_n u_pn u_pnᵀ/σ_n² (paper eq. 6). Relaxing w to [0, 1]^N
 gives a convex problem (cvxpy, solved by Clarabel) whose optimum lower-bounds every
-selection. Criteria, all *minimized* (see :mod:`placement.exhaustive` for the units):
+selection. Criteria, all *minimized* (see :mod:`placement.selection` for the units):
 
 * ``"A"``: mean over the nodes of tr J_p⁻¹ (m²). Each tr J_p⁻¹ is written with the Schur
   complement LMI [[X_p, I], [I, J_p(w)]] ⪰ 0 ⇔ X_p ⪰ J_p⁻¹, minimizing Σ tr X_p / P.
@@ -52,12 +52,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from placement.exhaustive import (
+from placement.selection import (
     DEFAULT_SPACING,
+    ENTRIES,
     ENTRY_WEIGHTS,
-    criterion_values,
     design_inputs,
     node_values,
+    subset_values,
 )
 from simulation import checks
 from simulation.room import Room
@@ -67,8 +68,6 @@ log = logging.getLogger(__name__)
 #: most candidate points of a relaxation (the problem has N weights and 36·P LMI entries)
 MAX_CANDIDATES = 5000
 
-#: (row, col) of the six unique entries (xx, yy, zz, xy, xz, yz) of a symmetric 3×3
-_IU = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 #: (row, col) of the six entries of a lower-triangular 3×3 Z (D criterion)
 _IL = ((0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1))
 #: relative slack: a bound above value·(1 + this) is rejected as not verified
@@ -164,7 +163,7 @@ def _lmi_maps(G: np.ndarray, criterion: str):
 
     "A"/"minimax": L_p = [[X_p, I], [I, J_p(w)]]; "D": L_p = [[J_p(w), Z_p], [Z_pᵀ,
     Diag(Z_p)]]. ``z`` holds six numbers per node, z[6p + k]: the entries of X_p in the
-    order of ``_IU`` or of the lower-triangular Z_p in the order of ``_IL``.
+    order of ``ENTRIES`` or of the lower-triangular Z_p in the order of ``_IL``.
     """
     import scipy.sparse as sp
 
@@ -176,13 +175,13 @@ def _lmi_maps(G: np.ndarray, criterion: str):
         return base + r * 6 + c
 
     rows_w, vals_w = [], []
-    for k, (i, j) in enumerate(_IU):  # J_p(w) entries, both triangles: dense in w
+    for k, (i, j) in enumerate(ENTRIES):  # J_p(w) entries, both triangles: dense in w
         for r, c in {(i, j), (j, i)}:
             rows_w.append(np.repeat(pos(J0 + r, J0 + c), N))
             vals_w.append(G[k].T.ravel())  # (P, N) row-major, matches np.repeat
     cols_w = np.tile(np.arange(N), P * len(rows_w))
     rows_z, cols_z = [], []
-    for k, (i, j) in enumerate(_IU if criterion != "D" else _IL):
+    for k, (i, j) in enumerate(ENTRIES if criterion != "D" else _IL):
         if criterion != "D":  # X_p, symmetric, top-left block
             cells = {(i, j), (j, i)}
         else:  # Z_p top-right, Z_pᵀ bottom-left, diag(Z_p) bottom-right
@@ -286,7 +285,7 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
         return None
     P = J6.shape[1]
     J = np.empty((P, 3, 3))
-    for k, (i, j) in enumerate(_IU):
+    for k, (i, j) in enumerate(ENTRIES):
         J[:, i, j] = J[:, j, i] = J6[k]
     Jinv = np.linalg.inv(J)
     if criterion == "D":
@@ -303,7 +302,7 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
             lam = lam / lam.sum()
             Y *= lam[:, None, None]
             f_lin = float(lam @ f_nodes)
-    Y6 = np.stack([Y[:, i, j] for i, j in _IU]) * ENTRY_WEIGHTS[:, None]  # (6, P)
+    Y6 = np.stack([Y[:, i, j] for i, j in ENTRIES]) * ENTRY_WEIGHTS[:, None]  # (6, P)
     c = np.einsum("knp,kp->n", G, Y6)  # −∂f/∂w_n ≥ 0
     top = np.sort(c)[::-1][:M].sum()
     bound = f_lin + float(c @ w) - top
@@ -314,14 +313,6 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
 
 
 # -- rounding ---------------------------------------------------------------------------------
-def _subset_values(G: np.ndarray, S: np.ndarray, criterion: str) -> np.ndarray:
-    """Normalized objective of subsets S (K, M) → (K,)."""
-    out = np.empty(S.shape[0])
-    for lo in range(0, S.shape[0], 64):
-        out[lo : lo + 64] = criterion_values(G[:, S[lo : lo + 64]].sum(axis=2), criterion)
-    return out
-
-
 def _lowered(x: float) -> float:
     """x minus a relative 1e-12 (x itself if not finite): the bar for a strict improvement."""
     return x - 1e-12 * abs(x) if np.isfinite(x) else x
@@ -381,7 +372,7 @@ def _round(G, w, M, criterion, rng, samples: int, starts: int):
     drawn = np.argpartition(-keys, M - 1, axis=1)[:, :M]
     top = np.argsort(-(p + 1e-9 * rng.random(N)), kind="stable")[:M]
     S = np.unique(np.sort(np.vstack([top[None], drawn]), axis=1), axis=0)
-    v = _subset_values(G, S, criterion)
+    v = subset_values(G, S, criterion)
     order = np.argsort(v, kind="stable")[:starts]
     best_S, best_v = S[order[0]], float(v[order[0]])
     for k in order:

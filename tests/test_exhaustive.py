@@ -8,7 +8,7 @@ import pytest
 
 import analysis
 import placement
-from placement.exhaustive import criterion_values, fim_table
+from placement.selection import criterion_values, fim_table
 from simulation import Room
 
 

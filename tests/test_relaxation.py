@@ -8,7 +8,7 @@ import pytest
 import analysis
 import placement
 import placement.relaxation as relaxation
-from placement.exhaustive import criterion_values, design_inputs
+from placement.selection import criterion_values, design_inputs
 from simulation import Room
 
 SHOEBOX = Room(
