@@ -98,9 +98,9 @@ def build_api_cases(tmp: Path) -> None:
     for v in [1.7, -1, "0", True, [1, 2]]:
         api(
             "counts",
-            f"evaluate_layout(seed={v!r})",
-            "seed",
-            lambda v=v: evaluate_layout(ROOM, A, seed=v, nodes=NODES),
+            f"evaluate_layout(rng={v!r})",
+            "rng",
+            lambda v=v: evaluate_layout(ROOM, A, rng=v, nodes=NODES),
         )
     for arg, vals in (
         ("max_iter", [0, 1.5, True]),
@@ -154,7 +154,7 @@ def build_api_cases(tmp: Path) -> None:
         ("M", [3, 4.5, True, 10**6]),
         ("samples", [0, True]),
         ("starts", [0, 2.5]),
-        ("seed", [1.5, "a"]),
+        ("rng", [1.5, "a"]),
     ):
         for v in vals:
             kw = {"M": 4, arg: v}
@@ -708,7 +708,7 @@ def build_neighbour_cases() -> None:
         ),
         "evaluate_layout": (
             evaluate_layout,
-            {"room": ROOM, "anchors": A, "realizations": 1, "seed": 0, "nodes": S, "chunk": 1},
+            {"room": ROOM, "anchors": A, "realizations": 1, "rng": 0, "nodes": S, "chunk": 1},
         ),
         "locate": (locate, {"anchors": A, "ranges": np.ones((2, 4)), "max_iter": 100}),
         "noise_sigma": (noise_sigma, {"room": ROOM, "anchors": A, "snr_db": 30.0}),
@@ -725,7 +725,7 @@ def build_neighbour_cases() -> None:
         "calibrated_sigma": (analysis.calibrated_sigma, {"range_errors": np.ones((2, 3, 4))}),
         "dop": (
             analysis.dop,
-            {"position_errors": np.ones((2, 3)), "range_errors": np.ones((2, 3, 4))},
+            {"errors": np.ones((2, 3)), "range_errors": np.ones((2, 3, 4))},
         ),
         "candidate_grid": (placement.candidate_grid, {"room": ROOM, "spacing": 0.5}),
         "random_layout": (placement.random_layout, {"room": ROOM, "M": 4, "rng": 0}),

@@ -19,9 +19,11 @@ import itertools
 import math
 import time
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
+from placement.result import LayoutResult
 from placement.selection import DEFAULT_SPACING, criterion_values, design_inputs
 from simulation import checks
 from simulation.room import Room
@@ -32,35 +34,33 @@ _BLOCK = 256
 
 # -- exhaustive search ------------------------------------------------------------------------
 @dataclass(frozen=True)
-class ExhaustiveResult:
-    """The best subset(s) of an exhaustive search.
+class ExhaustiveResult(LayoutResult):
+    """The best subset(s) of an exhaustive search (:mod:`placement.result` convention).
 
-    ``anchors`` (M, 3) m and ``indices`` (M,) into ``candidates`` of the best subset,
-    ``value`` its criterion value (m², see the module docstring), ``top_indices`` (k, M)
-    and ``top_values`` (k,) the k best subsets in increasing value, ``n_subsets`` the
-    number of subsets scored, ``solve_time`` the wall time in s.
+    ``anchors`` (M, 3) m and ``indices`` (M,) into the candidates of the best subset;
+    ``cost_m2`` (= ``fun``) its criterion value in m² (:mod:`placement.selection`);
+    ``top_indices`` (k, M) and ``top_costs_m2`` (k,) the k best subsets in increasing cost;
+    ``nfev`` the number of subsets scored; ``solve_time`` the wall time in s. ``status``:
+    see :attr:`STATUS`; ``success`` is True when the best subset has a finite cost.
     """
+
+    FUN: ClassVar[str] = "cost_m2"
+    STATUS: ClassVar[dict[int, str]] = {
+        0: "optimal: the best subset of all C(N, M) was found",
+        1: "singular: every subset has a singular FIM at some node (cost +inf)",
+    }
 
     anchors: np.ndarray
     indices: np.ndarray
-    value: float
+    cost_m2: float
     criterion: str
     top_indices: np.ndarray
-    top_values: np.ndarray
-    n_subsets: int
+    top_costs_m2: np.ndarray
+    success: bool
+    status: int
+    message: str
+    nfev: int
     solve_time: float
-
-    def to_dict(self) -> dict:
-        return {
-            "anchors": self.anchors.tolist(),
-            "indices": self.indices.tolist(),
-            "value": self.value,
-            "criterion": self.criterion,
-            "top_indices": self.top_indices.tolist(),
-            "top_values": self.top_values.tolist(),
-            "n_subsets": self.n_subsets,
-            "solve_time": self.solve_time,
-        }
 
 
 def exhaustive_search(
@@ -78,8 +78,8 @@ def exhaustive_search(
     """Score every M-subset of the candidates and return the best (ties: first in order).
 
     Same arguments and criteria as :func:`placement.relax_select`. ``max_subsets`` guards
-    against C(N, M) being too large (≈ 5 µs per subset on 270 nodes); ``top_k`` ≥ 1 best
-    subsets are kept. Raises ``ValueError`` on bad input.
+    against C(N, M) being too large (time grows linearly with it: docs/implementation.md);
+    ``top_k`` ≥ 1 best subsets are kept. Raises ``ValueError`` on bad input.
     """
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
     max_subsets = checks.count("max_subsets", max_subsets, low=1)
@@ -123,13 +123,17 @@ def exhaustive_search(
             filled = order.size
             best_v[:filled], best_s[:filled] = allv[order], alls[order]
     idx = best_s[0].copy()
+    status = 0 if math.isfinite(best_v[0]) else 1
     return ExhaustiveResult(
         anchors=inp.candidates[idx].copy(),
         indices=idx,
-        value=float(inp.scale(best_v[0])),
+        cost_m2=float(inp.scale(best_v[0])),
         criterion=criterion,
         top_indices=best_s[:filled].copy(),
-        top_values=np.atleast_1d(inp.scale(best_v[:filled])),
-        n_subsets=n_total,
+        top_costs_m2=np.atleast_1d(inp.scale(best_v[:filled])),
+        success=status == 0,
+        status=status,
+        message=ExhaustiveResult.STATUS[status],
+        nfev=n_total,
         solve_time=time.perf_counter() - t0,
     )

@@ -244,7 +244,8 @@ def test_refine_never_reports_success_with_duplicated_anchors(monkeypatch):
 
     monkeypatch.setattr(refine, "from_uv", collapse)
     res = placement.refine_peb(ROOM, placement.random_layout(ROOM, 5, 1), return_info=True)
-    assert not res.success and not res.accepted and res.status.startswith("duplicate_anchors")
+    assert not res.success and not res.accepted and res.status == 4
+    assert res.message.startswith("duplicate_anchors")
 
 
 # -- physics -------------------------------------------------------------------------------
