@@ -84,7 +84,6 @@ def test_pso_options_counts(field, v):
         (lambda: Room(max_order=True), "max_order"),
         (lambda: Room(max_order=2.5), "max_order"),
         (lambda: evaluate_layout(ROOM, A, realizations=True), "realizations"),
-        (lambda: evaluate_layout(ROOM, A, seed=1.7), "seed"),
         (lambda: evaluate_layout(ROOM, A, rng=1.7), "rng"),
         (lambda: evaluate_layout(ROOM, A, rng=-1), "rng"),
         (lambda: evaluate_layout(ROOM, A, chunk=0.5), "chunk"),
