@@ -346,30 +346,8 @@ def peb_map(
             aspect="equal",
         )
         _draw_regions2d(ax, room, iu, iv)
-        ax.scatter(
-            anchors[:, iu],
-            anchors[:, iv],
-            marker="s",
-            s=46,
-            c=anchor_color,
-            edgecolors="white",  # visible on the dark and the bright end of viridis
-            linewidths=1.0,
-            zorder=3,
-            gid="anchors",
-            clip_on=False,
-        )
-        for j, a in enumerate(anchors):
-            ax.annotate(
-                str(j + 1),
-                (a[iu], a[iv]),
-                xytext=(5, 4),
-                textcoords="offset points",
-                fontsize=8,
-                color="black",
-                fontweight="bold",
-                path_effects=_outline(),
-                annotation_clip=False,
-            )
+        # white edges: visible on the dark and the bright end of viridis
+        _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
         ax.set_xlim(extent[0], extent[1])
         ax.set_ylim(extent[2], extent[3])
         ax.set_xlabel(f"{_AXES[iu]} (m)")
@@ -386,6 +364,103 @@ def peb_map(
         )
         if finite.size < allvals.size:
             title += "   (grey: singular, PEB = ∞)"
+    fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black") -> None:
+    """Anchors projected onto the (iu, iv) plane as squares numbered 1…M (row order)."""
+    ax.scatter(
+        anchors[:, iu],
+        anchors[:, iv],
+        marker="s",
+        s=46,
+        c=color,
+        edgecolors=edge,
+        linewidths=1.0,
+        zorder=3,
+        gid="anchors",
+        clip_on=False,
+    )
+    for j, a in enumerate(anchors):
+        ax.annotate(
+            str(j + 1),
+            (a[iu], a[iv]),
+            xytext=(5, 4),
+            textcoords="offset points",
+            fontsize=8,
+            color="black",
+            fontweight="bold",
+            path_effects=_outline(),
+            annotation_clip=False,
+        )
+
+
+def _draw_mounting2d(ax, room: Room, k: int) -> None:
+    """The mounting surfaces seen along axis ``k``: a surface parallel to the view as a
+    shaded rectangle, one across it as a thick line at its plane."""
+    from matplotlib.patches import Rectangle
+
+    iu, iv = (i for i in range(3) if i != k)
+    L, o = room.size, room.anchor_offset
+    for name in room.mounting:
+        axis, side = SURFACES[name]
+        if axis == k:
+            ax.add_patch(
+                Rectangle(
+                    (o, o),
+                    L[iu] - 2 * o,
+                    L[iv] - 2 * o,
+                    facecolor=(0.85, 0.88, 0.93),
+                    edgecolor="none",
+                    zorder=0.5,
+                    gid="mounting",
+                )
+            )
+            continue
+        at = side * L[axis]
+        if axis == iu:
+            ax.plot([at, at], [0, L[iv]], color="0.35", lw=4, zorder=1, gid="mounting")
+        else:
+            ax.plot([0, L[iu]], [at, at], color="0.35", lw=4, zorder=1, gid="mounting")
+
+
+def plan_view(
+    room: Room,
+    anchors,
+    *,
+    color: str = ANCHOR_COLOR,
+    title: str | None = None,
+    figsize=None,
+    dpi: float = 100,
+) -> Figure:
+    """The layout in two views: the plan (from above, x–y) and the elevation (from the
+    south, x–z), anchors as squares numbered as the rows of ``anchors`` (M, 3) in metres.
+
+    Mounting surfaces are drawn shaded (parallel to the view) or as thick grey lines (seen
+    edge-on); keep-outs hatched, tag zones dashed, as in :func:`peb_map`.
+    """
+    from matplotlib.patches import Rectangle
+
+    room = as_room(room)
+    anchors = _as_points(anchors, "anchors")
+    L = room.size
+    fig = new_figure(figsize or (10.0, 3.6), dpi)
+    views = ((2, "plan (from above)"), (1, "elevation (from the south)"))
+    for ax, (k, label) in zip(fig.subplots(1, 2).ravel(), views, strict=True):
+        iu, iv = (i for i in range(3) if i != k)
+        ax.add_patch(Rectangle((0, 0), L[iu], L[iv], fill=False, edgecolor="black", lw=1.0))
+        _draw_mounting2d(ax, room, k)
+        _draw_regions2d(ax, room, iu, iv)
+        _numbered_anchors2d(ax, anchors, iu, iv, color)
+        ax.set_xlim(-0.02 * L[iu], 1.02 * L[iu])
+        ax.set_ylim(-0.04 * L[iv], 1.04 * L[iv])
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{_AXES[iu]} (m)")
+        ax.set_ylabel(f"{_AXES[iv]} (m)")
+        ax.set_title(label, fontsize=10, pad=10)
+    if title is None:
+        title = f"Layout, M = {len(anchors)} (shaded, thick grey: the mounting surfaces)"
     fig.suptitle(title, fontsize=11)
     return fig
 
