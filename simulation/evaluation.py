@@ -280,6 +280,35 @@ class Evaluation:
         return d
 
 
+def _check_workers(workers) -> None:
+    if workers is not None and (
+        isinstance(workers, bool)
+        or not isinstance(workers, int | np.integer)
+        or workers not in range(-1, 1025)
+        or workers == 0
+    ):
+        raise ValueError(
+            "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
+            f"got {checks.describe(workers)}"
+        )
+
+
+def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, workers, noise):
+    """(R, P, M) ranges; realization r from ``SeedSequence(seed).spawn(R)[r]``, ``chunk``
+    realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise)."""
+    P, M = scene.shape
+    if chunk is None:
+        chunk = max(1, NOISE_BUDGET_BYTES // (P * M * scene.receiver.window * 8))
+    children = np.random.SeedSequence(seed).spawn(realizations)
+    ranges = np.empty((realizations, P, M))
+    threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
+    with threads:
+        for i in range(0, realizations, chunk):
+            rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
+            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
+    return ranges
+
+
 def evaluate_layout(
     room: Room,
     anchors,
@@ -328,17 +357,7 @@ def evaluate_layout(
     max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
-    if workers is not None and (
-        isinstance(workers, bool)
-        or not isinstance(workers, int | np.integer)
-        or workers not in range(-1, 1025)
-    ):
-        raise ValueError(
-            "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
-            f"got {checks.describe(workers)}"
-        )
-    if workers == 0:
-        raise ValueError("workers: must be None, -1 (all cores) or an integer in [1, 1024], got 0")
+    _check_workers(workers)
     n_nodes = len(room.grid()) if nodes is None else len(_check_nodes(nodes, room))
     checks.check_size(
         "realizations",
@@ -355,17 +374,7 @@ def evaluate_layout(
         receiver=receiver,
         precision=precision,
     )
-    P, M = scene.shape
-    if chunk is None:
-        per = P * M * scene.receiver.window * 8
-        chunk = max(1, NOISE_BUDGET_BYTES // per)
-    children = np.random.SeedSequence(seed).spawn(realizations)
-    ranges = np.empty((realizations, P, M))
-    threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
-    with threads:
-        for i in range(0, realizations, chunk):
-            rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
-            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
+    ranges = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
     region = (np.zeros(3), np.asarray(room.size, dtype=float))
     fix = locate(
         anchors, ranges, region=region, bounded=bounded, max_iter=max_iter, full_output=True
