@@ -80,22 +80,20 @@ def _components(a: np.ndarray, p: np.ndarray, w: np.ndarray):
     )
 
 
+def _cross(a, b, c, d):
+    """a·b − c·d, with one temporary."""
+    out = a * b
+    out -= c * d
+    return out
+
+
 def minors_det(xx, yy, zz, xy, xz, yz):
     """(Σ of the principal 2×2 minors = tr adj J, det J) of symmetric 3×3 matrices J given
     by their six unique entries (arrays of one shape); the inputs are not modified."""
-    mx = yy * zz
-    mx -= yz * yz
-    my = xx * zz
-    my -= xz * xz
-    mz = xx * yy
-    mz -= xy * xy
-    t1 = xy * zz
-    t1 -= yz * xz
-    t2 = xy * yz
-    t2 -= yy * xz
+    mx, my, mz = _cross(yy, zz, yz, yz), _cross(xx, zz, xz, xz), _cross(xx, yy, xy, xy)
     det = xx * mx
-    det -= xy * t1
-    det += xz * t2
+    det -= xy * _cross(xy, zz, yz, xz)
+    det += xz * _cross(xy, yz, yy, xz)
     minors = mx + my
     minors += mz
     return minors, det

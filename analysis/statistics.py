@@ -10,32 +10,10 @@ from __future__ import annotations
 import numpy as np
 
 from simulation import checks
-from simulation.statistics import (
-    STATISTICS,
-    axis_errors,
-    dop,
-    dop_rms,
-    error_stats,
-    euclidean_errors,
-    node_mean,
-    node_rmse,
-    node_std,
-    range_std,
-)
+from simulation import statistics as _statistics
+from simulation.statistics import *  # noqa: F403 - the one home of the error statistics
 
-__all__ = [
-    "STATISTICS",
-    "axis_errors",
-    "dop",
-    "dop_rms",
-    "ecdf",
-    "error_stats",
-    "euclidean_errors",
-    "node_mean",
-    "node_rmse",
-    "node_std",
-    "range_std",
-]
+__all__ = [*_statistics.__all__, "ecdf"]
 
 
 def ecdf(values) -> tuple[np.ndarray, np.ndarray]:

@@ -147,6 +147,11 @@ def simulate_ranges(
     return scene.ranges(rng, noise=noise)
 
 
+def _stat(key: str, doc: str) -> property:
+    """A read-only property giving ``self.stats[key]``."""
+    return property(lambda self: self.stats[key], doc=doc)
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Monte Carlo result of :func:`evaluate_layout` (metres throughout).
@@ -189,21 +194,10 @@ class Evaluation:
         and ``n_invalid`` (:func:`simulation.statistics.error_stats`)."""
         return statistics.error_stats(self.errors)
 
-    @property
-    def std(self) -> float:
-        return self.stats["std"]
-
-    @property
-    def mean(self) -> float:
-        return self.stats["mean"]
-
-    @property
-    def p95(self) -> float:
-        return self.stats["p95"]
-
-    @property
-    def rms(self) -> float:
-        return self.stats["rms"]
+    std = _stat("std", "population standard deviation σ of all R·P errors (m), the paper's σ")
+    mean = _stat("mean", "mean of all R·P errors (m)")
+    p95 = _stat("p95", "95th percentile of all R·P errors (m)")
+    rms = _stat("rms", "RMS of all R·P errors (m)")
 
     @property
     def axis_errors(self) -> np.ndarray:
