@@ -152,6 +152,17 @@ def _stat(key: str, doc: str) -> property:
     return property(lambda self: self.stats[key], doc=doc)
 
 
+def _computed(fn, doc: str, *fields: str) -> functools.cached_property:
+    """A cached property: ``fn`` of the named fields (a function of
+    :mod:`simulation.statistics`)."""
+
+    def get(self):
+        return fn(*(getattr(self, f) for f in fields))
+
+    get.__doc__ = doc
+    return functools.cached_property(get)
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Monte Carlo result of :func:`evaluate_layout` (metres throughout).
@@ -204,35 +215,34 @@ class Evaluation:
         """(R, P, 3) absolute per-axis errors |p̂ − p|."""
         return statistics.axis_errors(self.estimates, self.nodes)
 
-    @functools.cached_property
-    def rmse(self) -> np.ndarray:
-        """(P,) RMS over realizations of the Euclidean error (the numerator of :attr:`dop_rms`)."""
-        return statistics.node_rmse(self.errors)
-
-    @functools.cached_property
-    def node_std(self) -> np.ndarray:
-        """(P,) standard deviation over realizations of the Euclidean error (σ^p of :attr:`dop`)."""
-        return statistics.node_std(self.errors)
-
-    @functools.cached_property
-    def node_mean(self) -> np.ndarray:
-        """(P,) mean Euclidean error per node."""
-        return statistics.node_mean(self.errors)
-
-    @functools.cached_property
-    def range_std(self) -> np.ndarray:
-        """(P,) σ_r: mean over anchors of the std over realizations of the range error."""
-        return statistics.range_std(self.range_errors)
-
-    @functools.cached_property
-    def dop(self) -> np.ndarray:
-        """(P,) the paper's DOP (§V-A) = node_std / range_std; +inf where σ_r = 0."""
-        return statistics.dop(self.errors, self.range_errors)
-
-    @functools.cached_property
-    def dop_rms(self) -> np.ndarray:
-        """(P,) the RMS-based DOP = rmse / range_std (≥ :attr:`dop`); +inf where σ_r = 0."""
-        return statistics.dop_rms(self.errors, self.range_errors)
+    rmse = _computed(
+        statistics.node_rmse,
+        "(P,) RMS over realizations of the Euclidean error (the numerator of dop_rms)",
+        "errors",
+    )
+    node_std = _computed(
+        statistics.node_std,
+        "(P,) standard deviation over realizations of the Euclidean error (σ^p of dop)",
+        "errors",
+    )
+    node_mean = _computed(statistics.node_mean, "(P,) mean Euclidean error per node", "errors")
+    range_std = _computed(
+        statistics.range_std,
+        "(P,) σ_r: mean over anchors of the std over realizations of the range error",
+        "range_errors",
+    )
+    dop = _computed(
+        statistics.dop,
+        "(P,) the paper's DOP (§V-A) = node_std / range_std; +inf where σ_r = 0",
+        "errors",
+        "range_errors",
+    )
+    dop_rms = _computed(
+        statistics.dop_rms,
+        "(P,) the RMS-based DOP = rmse / range_std (≥ dop); +inf where σ_r = 0",
+        "errors",
+        "range_errors",
+    )
 
     @property
     def n_unconverged(self) -> int:
