@@ -392,18 +392,25 @@ def _outside_and_duplicate_cases() -> None:
     dup = np.vstack([A, A[:1]])
     near = np.vstack([A, A[:1] + [0, 0, 0.0005]])
     for label, lay in (("duplicated", dup), ("0.5 mm apart", near)):
-        api(
-            "geometry",
-            f"evaluate_layout(anchors {label})",
-            "anchors",
-            lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
-        )
+        _bad_anchor_cases(label, lay, refine=True)
+
+
+def _bad_anchor_cases(label: str, lay, *, ranges: bool = True, refine: bool = False) -> None:
+    """Anchors ``lay`` given to the simulation (and the refinement)."""
+    api(
+        "geometry",
+        f"evaluate_layout(anchors {label})",
+        "anchors",
+        lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
+    )
+    if ranges:
         api(
             "geometry",
             f"simulate_ranges(anchors {label})",
             "anchors",
             lambda a=lay: simulate_ranges(ROOM, a, NODES),
         )
+    if refine:
         api(
             "geometry",
             f"refine_peb(anchors {label})",
@@ -422,19 +429,7 @@ def _degenerate_geometry_cases() -> None:
         ("strings", "abc"),
         ("ragged", [[1, 1, 1], [2, 2]]),
     ):
-        api(
-            "geometry",
-            f"evaluate_layout(anchors {label})",
-            "anchors",
-            lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
-        )
-        if label != "3 anchors":  # 3 anchors are fine for ranges
-            api(
-                "geometry",
-                f"simulate_ranges(anchors {label})",
-                "anchors",
-                lambda a=lay: simulate_ranges(ROOM, a, NODES),
-            )
+        _bad_anchor_cases(label, lay, ranges=label != "3 anchors")  # 3 are fine for ranges
     api(
         "geometry",
         "refine_peb(anchors off the surfaces)",
