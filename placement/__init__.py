@@ -9,6 +9,7 @@ from placement.plan import PlacementResult, SeedLayout, seed_then_pso
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.refine import RefineResult, refine_peb
 from placement.relaxation import Selection, relax_select
+from placement.result import LayoutResult
 from placement.surfaces import (
     MountingSurface,
     aim,
@@ -39,6 +40,7 @@ __all__ = [
     "pso",
     "seed_then_pso",
     "ExhaustiveResult",
+    "LayoutResult",
     "MountingSurface",
     "RefineResult",
     "Selection",
