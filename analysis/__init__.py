@@ -3,6 +3,7 @@
 Imports only from :mod:`simulation` (never from :mod:`placement`).
 """
 
+from analysis import statistics
 from analysis.fim import crlb, crlb_trace, fim, gdop, peb
 from analysis.noise import (
     CalibratedRangeNoise,
@@ -12,31 +13,19 @@ from analysis.noise import (
     calibrated_sigma,
     direct_amplitude,
 )
-from analysis.statistics import (
-    ErrorStats,
-    axis_errors,
-    dop,
-    ecdf,
-    error_stats,
-    euclidean_errors,
-)
+from analysis.statistics import *  # noqa: F403 - error statistics, DOP, ECDF
 
 __all__ = [
     "CalibratedRangeNoise",
     "ConstantRangeNoise",
     "MultipathRangeNoise",
-    "ErrorStats",
     "PhysicalRangeNoise",
-    "axis_errors",
     "calibrated_sigma",
     "crlb",
     "crlb_trace",
     "direct_amplitude",
-    "dop",
-    "ecdf",
-    "error_stats",
-    "euclidean_errors",
     "fim",
     "gdop",
     "peb",
+    *statistics.__all__,
 ]

@@ -38,6 +38,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from analysis.fim import peb as _peb
+from analysis.statistics import ecdf, error_stats
 from simulation import checks
 from simulation.directivity import aim_vectors
 from simulation.room import SURFACES, Room, as_room
@@ -71,18 +72,18 @@ _MAX_CDF_POINTS = 2000
 
 # -- colours ------------------------------------------------------------------------------
 #: fixed palette slots of the names the CLI and reports use (high contrast between them)
-FIXED_SLOTS: dict[str, int] = {"optimized": 0, "corners": 1, "evaluated": 2}
+FIXED_SLOTS: dict[str, int] = {"optimized": 0, "corners": 1, "evaluated": 2, "naive": 3}
 
 
 def layout_colors(names: Sequence[str], palette: Sequence[str] = PALETTE) -> dict[str, str]:
     """Colour per layout name, stable across figures: name → hex colour.
 
-    The names of :data:`FIXED_SLOTS` ("optimized", "corners", "evaluated") always get
-    their slot (blue, vermillion, green with the default palette); any other name prefers
-    the slot given by a hash of the name (CRC-32, independent of Python's hash seed), so a
-    layout gets the same colour whenever it is drawn with different companions; collisions
-    within ``names`` move to the next free slot (in the order of ``names``). Pass the same
-    mapping to every figure to be fully consistent.
+    The names of :data:`FIXED_SLOTS` ("optimized", "corners", "evaluated", "naive") always
+    get their slot (blue, vermillion, green, purple-pink with the default palette); any
+    other name prefers the slot given by a hash of the name (CRC-32, independent of
+    Python's hash seed), so a layout gets the same colour whenever it is drawn with
+    different companions; collisions within ``names`` move to the next free slot (in the
+    order of ``names``). Pass the same mapping to every figure to be fully consistent.
     """
     names = list(dict.fromkeys(names))
     out: dict[str, str] = {}
@@ -345,30 +346,8 @@ def peb_map(
             aspect="equal",
         )
         _draw_regions2d(ax, room, iu, iv)
-        ax.scatter(
-            anchors[:, iu],
-            anchors[:, iv],
-            marker="s",
-            s=46,
-            c=anchor_color,
-            edgecolors="white",  # visible on the dark and the bright end of viridis
-            linewidths=1.0,
-            zorder=3,
-            gid="anchors",
-            clip_on=False,
-        )
-        for j, a in enumerate(anchors):
-            ax.annotate(
-                str(j + 1),
-                (a[iu], a[iv]),
-                xytext=(5, 4),
-                textcoords="offset points",
-                fontsize=8,
-                color="black",
-                fontweight="bold",
-                path_effects=_outline(),
-                annotation_clip=False,
-            )
+        # white edges: visible on the dark and the bright end of viridis
+        _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
         ax.set_xlim(extent[0], extent[1])
         ax.set_ylim(extent[2], extent[3])
         ax.set_xlabel(f"{_AXES[iu]} (m)")
@@ -385,6 +364,103 @@ def peb_map(
         )
         if finite.size < allvals.size:
             title += "   (grey: singular, PEB = ∞)"
+    fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black") -> None:
+    """Anchors projected onto the (iu, iv) plane as squares numbered 1…M (row order)."""
+    ax.scatter(
+        anchors[:, iu],
+        anchors[:, iv],
+        marker="s",
+        s=46,
+        c=color,
+        edgecolors=edge,
+        linewidths=1.0,
+        zorder=3,
+        gid="anchors",
+        clip_on=False,
+    )
+    for j, a in enumerate(anchors):
+        ax.annotate(
+            str(j + 1),
+            (a[iu], a[iv]),
+            xytext=(5, 4),
+            textcoords="offset points",
+            fontsize=8,
+            color="black",
+            fontweight="bold",
+            path_effects=_outline(),
+            annotation_clip=False,
+        )
+
+
+def _draw_mounting2d(ax, room: Room, k: int) -> None:
+    """The mounting surfaces seen along axis ``k``: a surface parallel to the view as a
+    shaded rectangle, one across it as a thick line at its plane."""
+    from matplotlib.patches import Rectangle
+
+    iu, iv = (i for i in range(3) if i != k)
+    L, o = room.size, room.anchor_offset
+    for name in room.mounting:
+        axis, side = SURFACES[name]
+        if axis == k:
+            ax.add_patch(
+                Rectangle(
+                    (o, o),
+                    L[iu] - 2 * o,
+                    L[iv] - 2 * o,
+                    facecolor=(0.85, 0.88, 0.93),
+                    edgecolor="none",
+                    zorder=0.5,
+                    gid="mounting",
+                )
+            )
+            continue
+        at = side * L[axis]
+        if axis == iu:
+            ax.plot([at, at], [0, L[iv]], color="0.35", lw=4, zorder=1, gid="mounting")
+        else:
+            ax.plot([0, L[iu]], [at, at], color="0.35", lw=4, zorder=1, gid="mounting")
+
+
+def plan_view(
+    room: Room,
+    anchors,
+    *,
+    color: str = ANCHOR_COLOR,
+    title: str | None = None,
+    figsize=None,
+    dpi: float = 100,
+) -> Figure:
+    """The layout in two views: the plan (from above, x–y) and the elevation (from the
+    south, x–z), anchors as squares numbered as the rows of ``anchors`` (M, 3) in metres.
+
+    Mounting surfaces are drawn shaded (parallel to the view) or as thick grey lines (seen
+    edge-on); keep-outs hatched, tag zones dashed, as in :func:`peb_map`.
+    """
+    from matplotlib.patches import Rectangle
+
+    room = as_room(room)
+    anchors = _as_points(anchors, "anchors")
+    L = room.size
+    fig = new_figure(figsize or (10.0, 3.6), dpi)
+    views = ((2, "plan (from above)"), (1, "elevation (from the south)"))
+    for ax, (k, label) in zip(fig.subplots(1, 2).ravel(), views, strict=True):
+        iu, iv = (i for i in range(3) if i != k)
+        ax.add_patch(Rectangle((0, 0), L[iu], L[iv], fill=False, edgecolor="black", lw=1.0))
+        _draw_mounting2d(ax, room, k)
+        _draw_regions2d(ax, room, iu, iv)
+        _numbered_anchors2d(ax, anchors, iu, iv, color)
+        ax.set_xlim(-0.02 * L[iu], 1.02 * L[iu])
+        ax.set_ylim(-0.04 * L[iv], 1.04 * L[iv])
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{_AXES[iu]} (m)")
+        ax.set_ylabel(f"{_AXES[iv]} (m)")
+        ax.set_title(label, fontsize=10, pad=10)
+    if title is None:
+        title = f"Layout, M = {len(anchors)} (shaded, thick grey: the mounting surfaces)"
     fig.suptitle(title, fontsize=11)
     return fig
 
@@ -672,24 +748,13 @@ def layout_views(
 
 # -- CDFs ---------------------------------------------------------------------------------------
 def _cdf_xy(values) -> tuple[np.ndarray, np.ndarray]:
-    """ECDF of the finite values with F = i/n over *all* n values (failures keep F < 1).
-
-    Reduced to at most ``_MAX_CDF_POINTS`` points (evenly spaced ranks, last one kept).
-    """
-    v = np.asarray(values, dtype=float).ravel()
-    n = v.size
-    x = np.sort(v[np.isfinite(v)])
-    f = np.arange(1, x.size + 1) / max(n, 1)
+    """:func:`analysis.statistics.ecdf` (failures keep F < 1), reduced to at most
+    ``_MAX_CDF_POINTS`` points (evenly spaced ranks, last one kept)."""
+    x, f = ecdf(values)
     if x.size > _MAX_CDF_POINTS:
         idx = np.unique(np.linspace(0, x.size - 1, _MAX_CDF_POINTS).round().astype(int))
         x, f = x[idx], f[idx]
     return x, f
-
-
-def _p95(values) -> float:
-    v = np.asarray(values, dtype=float).ravel()
-    v = v[np.isfinite(v)]
-    return float(np.percentile(v, 95)) if v.size else float("nan")
 
 
 def _cdf_axes_style(ax, xscale: str, xlabel: str) -> None:
@@ -753,7 +818,7 @@ def error_cdfs(
                 lw=1.6,
                 drawstyle="steps-post",
                 gid=f"cdf:{name}",
-                label=f"{name}  (P95 {_p95(v):.3g} m)",
+                label=f"{name}  (P95 {error_stats(v)['p95']:.3g} m)",
             )
         _cdf_axes_style(ax, xscale, f"{pname} (m)")
         if xscale == "log":  # start at the 0.5 % quantile: tiny errors carry no information
@@ -850,36 +915,16 @@ def _cell_edges(c: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return np.concatenate([[max(lo, 2 * c[0] - mid[0])], mid, [min(hi, 2 * c[-1] - mid[-1])]])
 
 
-def dop_difference(
-    room: Room,
-    nodes,
-    dop_a,
-    dop_b,
-    *,
-    labels: tuple[str, str] = ("initial", "optimized"),
-    anchors_a=None,
-    anchors_b=None,
-    colors: Mapping[str, str] | None = None,
-    kind: str = "auto",
-    vlim: float | None = None,
-    figsize=None,
-    dpi: float = 100,
-) -> Figure:
-    """Per-node DOP difference DOP_a − DOP_b (dimensionless, paper Fig. 4).
+#: the DOP definitions :func:`dop_difference` can label: symbol and formula
+DOP_DEFINITIONS: dict[str, tuple[str, str]] = {
+    "paper": ("DOP", "the paper's DOP = σ/σ_r"),
+    "rms": ("DOP_RMS", "RMS-based DOP = RMSE/σ_r"),
+    "precision": ("DOP_prec", "precision DOP = spread of p̂/σ_r"),
+}
 
-    Positive (blue) = layout b has the lower DOP there (improvement from a to b); the
-    diverging colour scale is symmetric, ±max |difference|, or ±``vlim``; by default a
-    heavy tail (max |difference| > 3 × its P95) is clipped at ±P95 with arrows on the
-    colour bar, so that a few extreme nodes do not wash out the map. ``kind`` "layers" draws one
-    x–y panel per node height (needs a full regular grid such as ``room.grid()``),
-    "scatter3d" a 3D scatter, "auto" picks layers when possible. Anchors of either layout,
-    if given, are marked in their layout colours (projected in the layers view).
-    """
-    nodes = _as_points(nodes, "nodes")
-    a = _values(dop_a, "dop_a", len(nodes))
-    b = _values(dop_b, "dop_b", len(nodes))
-    with np.errstate(invalid="ignore"):  # inf − inf (σ_r = 0 in both) → NaN, drawn grey
-        diff = a - b
+
+def _dop_scale(diff: np.ndarray, vlim: float | None):
+    """(norm, limit, colour-bar extend) of the symmetric diverging DOP-difference scale."""
     finite = diff[np.isfinite(diff)]
     lim = float(np.max(np.abs(finite))) if finite.size else 1.0
     extend = "neither"
@@ -893,84 +938,136 @@ def dop_difference(
         if p95 > 0 and lim > 3 * p95:
             lim, extend = p95, "both"
     lim = lim if lim > 0 else 1.0
-    norm = TwoSlopeNorm(0.0, -lim, lim)
-    cmap = _cmap("RdBu")
+    return TwoSlopeNorm(0.0, -lim, lim), lim, extend
+
+
+def _anchor_marks2d(ax, marks, col) -> None:
+    for name, anc in marks:
+        if anc is None:
+            continue
+        anc = _as_points(anc, "anchors")
+        ax.scatter(
+            anc[:, 0],
+            anc[:, 1],
+            marker="s",
+            s=30,
+            c=col[name],
+            edgecolors="black",
+            linewidths=0.6,
+            zorder=3,
+            clip_on=False,
+            gid="anchors",
+        )
+
+
+def _dop_layers(room, diff, grid, norm, cmap, marks, col, figsize, dpi, cb_label, extend):
+    """One x–y panel of the difference per node height (nodes on a full regular grid)."""
+    xs, ys, zs, index = grid
+    nz = zs.size
+    ncols = 1 if nz == 1 else 2 if nz <= 4 else 3
+    nrows = math.ceil(nz / ncols)
+    fig = new_figure(figsize or (4.6 * ncols + 1.0, 2.6 * nrows + 0.9), dpi)
+    fig.get_layout_engine().set(wspace=0.06)
+    axs = fig.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True).ravel()
+    xe = _cell_edges(xs, 0.0, room.size[0])
+    ye = _cell_edges(ys, 0.0, room.size[1])
+    mesh = None
+    for iz, ax in enumerate(axs[:nz]):
+        layer = diff[index[:, :, iz]]
+        mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(layer.T), cmap=cmap, norm=norm, gid="dop")
+        _draw_regions2d(ax, room, 0, 1)
+        _anchor_marks2d(ax, marks, col)
+        ax.set_xlim(0, room.size[0])
+        ax.set_ylim(0, room.size[1])
+        ax.set_aspect("equal")
+        ax.set_title(f"nodes at z = {zs[iz]:.2f} m", fontsize=9)
+        # outer labels only (fewer texts: faster layout, less clutter)
+        last_in_column = iz + ncols >= nz
+        ax.set_xlabel("x (m)" if last_in_column else "")
+        ax.tick_params(labelbottom=last_in_column)
+        ax.set_ylabel("y (m)" if iz % ncols == 0 else "")
+        ax.tick_params(labelleft=iz % ncols == 0)
+    for ax in axs[nz:]:
+        ax.set_visible(False)
+    _colorbar(fig, mesh, list(axs[:nz]), cb_label, extend, shrink=0.9)
+    handles = [
+        Line2D([], [], marker="s", ls="", color=col[n_], mec="black", label=f"anchors {n_}")
+        for n_, anc in marks
+        if anc is not None
+    ]
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8)
+    return fig
+
+
+def _dop_scatter3d(room, nodes, diff, norm, cmap, marks, col, figsize, dpi, cb_label, extend):
+    """The difference on a 3D scatter of the nodes (any node set)."""
+    fig = new_figure(figsize or (7.0, 4.6), dpi)
+    ax = fig.add_subplot(projection="3d")
+    _room_box(ax, room)
+    sc = _draw_nodes3d(ax, nodes, diff, norm, cmap)
+    for name, anc in marks:
+        if anc is not None:
+            _draw_anchors3d(ax, room, _as_points(anc, "anchors"), col[name], aim=False)
+    _colorbar(fig, sc, ax, cb_label, extend, shrink=0.7, pad=0.12)
+    return fig
+
+
+def dop_difference(
+    room: Room,
+    nodes,
+    dop_a,
+    dop_b,
+    *,
+    labels: tuple[str, str] = ("initial", "optimized"),
+    anchors_a=None,
+    anchors_b=None,
+    colors: Mapping[str, str] | None = None,
+    kind: str = "auto",
+    vlim: float | None = None,
+    definition: str = "paper",
+    figsize=None,
+    dpi: float = 100,
+) -> Figure:
+    """Per-node DOP difference DOP_a − DOP_b (dimensionless, paper Fig. 4).
+
+    ``definition`` names the DOP given, for the labels (:data:`DOP_DEFINITIONS`):
+    "paper" (default, σ^p/σ_r^p with σ^p the standard deviation of the error,
+    :func:`simulation.statistics.dop`), "rms" (RMSE^p/σ_r^p,
+    :func:`simulation.statistics.dop_rms`) or "precision".
+    Positive (blue) = layout b has the lower DOP there (improvement from a to b); the
+    diverging colour scale is symmetric, ±max |difference|, or ±``vlim``; by default a
+    heavy tail (max |difference| > 3 × its P95) is clipped at ±P95 with arrows on the
+    colour bar, so that a few extreme nodes do not wash out the map. ``kind`` "layers" draws one
+    x–y panel per node height (needs a full regular grid such as ``room.grid()``),
+    "scatter3d" a 3D scatter, "auto" picks layers when possible. Anchors of either layout,
+    if given, are marked in their layout colours (projected in the layers view).
+    """
+    nodes = _as_points(nodes, "nodes")
+    a = _values(dop_a, "dop_a", len(nodes))
+    b = _values(dop_b, "dop_b", len(nodes))
+    sym, formula = DOP_DEFINITIONS[checks.choice("definition", definition, DOP_DEFINITIONS)]
+    if kind not in ("auto", "layers", "scatter3d"):
+        raise ValueError(f"kind: must be 'auto', 'layers' or 'scatter3d', got {kind!r}")
+    with np.errstate(invalid="ignore"):  # inf − inf (σ_r = 0 in both) → NaN, drawn grey
+        diff = a - b
+    norm, lim, extend = _dop_scale(diff, vlim)
     grid = _grid_layers(nodes) if kind in ("auto", "layers") else None
     if kind == "layers" and grid is None:
         raise ValueError("kind: 'layers' needs nodes on a full regular grid; use 'scatter3d'")
-    if kind not in ("auto", "layers", "scatter3d"):
-        raise ValueError(f"kind: must be 'auto', 'layers' or 'scatter3d', got {kind!r}")
     la, lb = labels
     col = _colors_for(list(labels), colors)
     marks = [(la, anchors_a), (lb, anchors_b)]
     ma, mb = np.mean(a[np.isfinite(a)]), np.mean(b[np.isfinite(b)])
-    title = f"DOP({la}) − DOP({lb});  mean DOP {la} {ma:.3g} → {lb} {mb:.3g}"
+    title = f"{sym}({la}) − {sym}({lb}), {formula};  mean {sym} {la} {ma:.3g} → {lb} {mb:.3g}"
     if extend == "both" and vlim is None:
         title += f"\n(colour scale clipped at ±{lim:.3g}, the P95 of |difference|)"
-    cb_label = f"DOP {la} − DOP {lb}  (> 0: {lb} better)"
+    cb_label = f"{sym} {la} − {sym} {lb}  (> 0: {lb} better)"
+    common = (norm, _cmap("RdBu"), marks, col, figsize, dpi, cb_label, extend)
     if grid is not None:
-        xs, ys, zs, index = grid
-        nz = zs.size
-        ncols = 1 if nz == 1 else 2 if nz <= 4 else 3
-        nrows = math.ceil(nz / ncols)
-        figsize = figsize or (4.6 * ncols + 1.0, 2.6 * nrows + 0.9)
-        fig = new_figure(figsize, dpi)
-        fig.get_layout_engine().set(wspace=0.06)
-        axs = fig.subplots(nrows, ncols, squeeze=False, sharex=True, sharey=True).ravel()
-        xe = _cell_edges(xs, 0.0, room.size[0])
-        ye = _cell_edges(ys, 0.0, room.size[1])
-        mesh = None
-        for iz, ax in enumerate(axs[:nz]):
-            layer = diff[index[:, :, iz]]
-            mesh = ax.pcolormesh(
-                xe, ye, np.ma.masked_invalid(layer.T), cmap=cmap, norm=norm, gid="dop"
-            )
-            _draw_regions2d(ax, room, 0, 1)
-            for name, anc in marks:
-                if anc is not None:
-                    anc = _as_points(anc, "anchors")
-                    ax.scatter(
-                        anc[:, 0],
-                        anc[:, 1],
-                        marker="s",
-                        s=30,
-                        c=col[name],
-                        edgecolors="black",
-                        linewidths=0.6,
-                        zorder=3,
-                        clip_on=False,
-                        gid="anchors",
-                    )
-            ax.set_xlim(0, room.size[0])
-            ax.set_ylim(0, room.size[1])
-            ax.set_aspect("equal")
-            ax.set_title(f"nodes at z = {zs[iz]:.2f} m", fontsize=9)
-            # outer labels only (fewer texts: faster layout, less clutter)
-            last_in_column = iz + ncols >= nz
-            ax.set_xlabel("x (m)" if last_in_column else "")
-            ax.tick_params(labelbottom=last_in_column)
-            ax.set_ylabel("y (m)" if iz % ncols == 0 else "")
-            ax.tick_params(labelleft=iz % ncols == 0)
-        for ax in axs[nz:]:
-            ax.set_visible(False)
-        _colorbar(fig, mesh, list(axs[:nz]), cb_label, extend, shrink=0.9)
-        handles = [
-            Line2D([], [], marker="s", ls="", color=col[n_], mec="black", label=f"anchors {n_}")
-            for n_, anc in marks
-            if anc is not None
-        ]
-        if handles:
-            fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize=8)
+        fig = _dop_layers(room, diff, grid, *common)
     else:
-        figsize = figsize or (7.0, 4.6)
-        fig = new_figure(figsize, dpi)
-        ax = fig.add_subplot(projection="3d")
-        _room_box(ax, room)
-        sc = _draw_nodes3d(ax, nodes, diff, norm, cmap)
-        for name, anc in marks:
-            if anc is not None:
-                _draw_anchors3d(ax, room, _as_points(anc, "anchors"), col[name], aim=False)
-        _colorbar(fig, sc, ax, cb_label, extend, shrink=0.7, pad=0.12)
+        fig = _dop_scatter3d(room, nodes, diff, *common)
     fig.suptitle(title, fontsize=10)
     return fig
 

@@ -15,7 +15,8 @@ scalar, a per-anchor (M,) array, a per-pair (P, M) array, or anything broadcasti
 A singular J (fewer than three independent directions, e.g. the node in the plane of
 coplanar anchors) gives PEB = +inf, never an exception, NaN or warning. J is declared
 singular when its smallest eigenvalue (estimated as det J / Σ principal 2×2 minors) is
-below ``SINGULAR_RTOL`` · tr J.
+below ``SINGULAR_RTOL`` · tr J: :func:`nonsingular` is that rule, used here and by the
+selection criteria of :mod:`placement.selection`.
 """
 
 from __future__ import annotations
@@ -79,16 +80,45 @@ def _components(a: np.ndarray, p: np.ndarray, w: np.ndarray):
     )
 
 
+def _cross(a, b, c, d):
+    """a·b − c·d, with one temporary."""
+    out = a * b
+    out -= c * d
+    return out
+
+
+def minors_det(xx, yy, zz, xy, xz, yz):
+    """(Σ of the principal 2×2 minors = tr adj J, det J) of symmetric 3×3 matrices J given
+    by their six unique entries (arrays of one shape); the inputs are not modified."""
+    mx, my, mz = _cross(yy, zz, yz, yz), _cross(xx, zz, xz, xz), _cross(xx, yy, xy, xy)
+    det = xx * mx
+    det -= xy * _cross(xy, zz, yz, xz)
+    det += xz * _cross(xy, yz, yy, xz)
+    minors = mx + my
+    minors += mz
+    return minors, det
+
+
+def nonsingular(xx, yy, zz, minors, det):
+    """The FIM-singularity rule, the one place it is written: J is singular when its
+    smallest eigenvalue, estimated as det J / Σ minors, is at most ``SINGULAR_RTOL`` · tr J
+    (or the minors are not positive). Returns a bool array, True where J is usable.
+
+    ``xx, yy, zz`` are J's diagonal entries, ``minors, det`` from :func:`minors_det`; every
+    bound-driven number (PEB, tr J⁻¹, the selection criteria) is +inf where this is False.
+    """
+    bar = xx + yy
+    bar += zz
+    bar *= minors
+    bar *= SINGULAR_RTOL
+    return (minors > 0) & (det > bar)
+
+
 def _trace_inverse(xx, yy, zz, xy, xz, yz) -> np.ndarray:
-    """tr J⁻¹ by the adjugate formula, +inf where J is singular."""
-    m_x = yy * zz - yz * yz  # principal 2×2 minors = diagonal of adj J
-    m_y = xx * zz - xz * xz
-    m_z = xx * yy - xy * xy
-    minors = m_x + m_y + m_z
-    det = xx * m_x - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz)
-    trace = xx + yy + zz
-    ok = (minors > 0) & (det > SINGULAR_RTOL * trace * minors)
-    out = np.full(det.shape, np.inf)
+    """tr J⁻¹ by the adjugate formula, +inf where J is singular (:func:`nonsingular`)."""
+    minors, det = minors_det(xx, yy, zz, xy, xz, yz)
+    ok = nonsingular(xx, yy, zz, minors, det)
+    out = np.full(np.shape(det), np.inf)
     np.divide(minors, det, out=out, where=ok)
     return out
 

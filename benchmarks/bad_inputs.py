@@ -81,11 +81,13 @@ def one_arg_cost(anchors):
 
 FAST = PSOOptions(particles=3, iterations=1)
 BAD_COUNTS = [True, False, 2.5, "3", -1, None, [3], float("nan")]
+PLAN_KW = dict(cost="peb", seeds=None, validate_realizations=0, progress=False, seed=0)
 BAD_REALS = [True, "1", None, float("nan"), float("inf"), [1.0], 1j]
 
 
 # -- counts: bools, floats, strings -------------------------------------------------------
-def build_api_cases(tmp: Path) -> None:
+def _simulation_count_cases() -> None:
+    """Counts of the simulation: bools, floats, strings."""
     for v in [*BAD_COUNTS, 13, 200, 1000]:
         api("counts", f"Room(max_order={v!r})", "max_order", lambda v=v: Room(max_order=v))
     for v in [*BAD_COUNTS, 0, 10**9, 10**7]:
@@ -98,9 +100,9 @@ def build_api_cases(tmp: Path) -> None:
     for v in [1.7, -1, "0", True, [1, 2]]:
         api(
             "counts",
-            f"evaluate_layout(seed={v!r})",
-            "seed",
-            lambda v=v: evaluate_layout(ROOM, A, seed=v, nodes=NODES),
+            f"evaluate_layout(rng={v!r})",
+            "rng",
+            lambda v=v: evaluate_layout(ROOM, A, rng=v, nodes=NODES),
         )
     for arg, vals in (
         ("max_iter", [0, 1.5, True]),
@@ -128,6 +130,10 @@ def build_api_cases(tmp: Path) -> None:
             "rng",
             lambda v=v: placement.random_layout(ROOM, 4, v),
         )
+
+
+def _optimizer_count_cases() -> None:
+    """Counts of the optimizers and positioning: bools, floats, strings."""
     for arg, vals in (
         ("particles", [True, 1, 3.7, "4", 10**9]),
         ("iterations", [True, 0, 1.9]),
@@ -154,7 +160,7 @@ def build_api_cases(tmp: Path) -> None:
         ("M", [3, 4.5, True, 10**6]),
         ("samples", [0, True]),
         ("starts", [0, 2.5]),
-        ("seed", [1.5, "a"]),
+        ("rng", [1.5, "a"]),
     ):
         for v in vals:
             kw = {"M": 4, arg: v}
@@ -191,8 +197,10 @@ def build_api_cases(tmp: Path) -> None:
         api("counts", f"room.grid({v!r})", "shape", lambda v=v: ROOM.grid(v))
     for v in [1000, True, -1, 2.5]:
         api("counts", f"image_indices({v!r})", "max_order", lambda v=v: image_indices(v))
-    # seed_then_pso: the optimizer's (plan group)
-    plan_kw = dict(cost="peb", seeds=None, validate_realizations=0, progress=False, seed=0)
+
+
+def _plan_cases() -> None:
+    """Seed_then_pso: the optimizer's (plan group)."""
     for arg, v in (
         ("particles", 3.7),
         ("iterations", 1.9),
@@ -207,7 +215,7 @@ def build_api_cases(tmp: Path) -> None:
         ("iterations", "2"),
         ("sigma", "0.04"),
     ):
-        kw = {**plan_kw, "particles": 3, "iterations": 1, arg: v}
+        kw = {**PLAN_KW, "particles": 3, "iterations": 1, arg: v}
         api(
             "counts",
             f"seed_then_pso({arg}={v!r})",
@@ -216,7 +224,9 @@ def build_api_cases(tmp: Path) -> None:
             group="plan",
         )
 
-    # -- options silently ignored or swallowed -----------------------------------------------
+
+def _ignored_option_cases() -> None:
+    """Options silently ignored or swallowed."""
     for v in [{"particles": 4}, "fast", 3]:
         api(
             "options",
@@ -234,12 +244,12 @@ def build_api_cases(tmp: Path) -> None:
         "options",
         "seed_then_pso(options={'particles': 4})",
         "options",
-        lambda: seed_then_pso(ROOM, 4, options={"particles": 4}, **plan_kw),
+        lambda: seed_then_pso(ROOM, 4, options={"particles": 4}, **PLAN_KW),
         group="plan",
     )
 
     def honoured():
-        res = seed_then_pso(ROOM, 4, options=PSOOptions(particles=4, iterations=2), **plan_kw)
+        res = seed_then_pso(ROOM, 4, options=PSOOptions(particles=4, iterations=2), **PLAN_KW)
         return res.nfev == 8
 
     api(
@@ -268,7 +278,9 @@ def build_api_cases(tmp: Path) -> None:
             group="plan",
         )
 
-    # -- bad input turned into a failed result --------------------------------------------
+
+def _failed_result_cases() -> None:
+    """Bad input turned into a failed result."""
     for label, v in (
         ("5", 5),
         ("'variance'", "variance"),
@@ -321,7 +333,7 @@ def build_api_cases(tmp: Path) -> None:
             f"seed_then_pso(cost='peb', {arg}={v!r})",
             arg,
             lambda a=arg, v=v: seed_then_pso(
-                ROOM, 4, particles=3, iterations=1, **{**plan_kw, a: v}
+                ROOM, 4, particles=3, iterations=1, **{**PLAN_KW, a: v}
             ),
             group="plan",
         )
@@ -342,7 +354,9 @@ def build_api_cases(tmp: Path) -> None:
             group="plan",
         )
 
-    # -- geometry -------------------------------------------------------------------------
+
+def _outside_and_duplicate_cases() -> None:
+    """Geometry: points outside the room, duplicated anchors."""
     outside = {"x > Lx": [[9.0, 1, 1]], "negative": [[-0.5, 1, 1]], "z > Lz": [[1, 1, 3.0]]}
     for label, pts in outside.items():
         api(
@@ -378,24 +392,35 @@ def build_api_cases(tmp: Path) -> None:
     dup = np.vstack([A, A[:1]])
     near = np.vstack([A, A[:1] + [0, 0, 0.0005]])
     for label, lay in (("duplicated", dup), ("0.5 mm apart", near)):
-        api(
-            "geometry",
-            f"evaluate_layout(anchors {label})",
-            "anchors",
-            lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
-        )
+        _bad_anchor_cases(label, lay, refine=True)
+
+
+def _bad_anchor_cases(label: str, lay, *, ranges: bool = True, refine: bool = False) -> None:
+    """Anchors ``lay`` given to the simulation (and the refinement)."""
+    api(
+        "geometry",
+        f"evaluate_layout(anchors {label})",
+        "anchors",
+        lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
+    )
+    if ranges:
         api(
             "geometry",
             f"simulate_ranges(anchors {label})",
             "anchors",
             lambda a=lay: simulate_ranges(ROOM, a, NODES),
         )
+    if refine:
         api(
             "geometry",
             f"refine_peb(anchors {label})",
             "anchors",
             lambda a=lay: placement.refine_peb(ROOM, a),
         )
+
+
+def _degenerate_geometry_cases() -> None:
+    """Geometry: degenerate layouts and node sets."""
     for label, lay in (
         ("outside", A + [0, 0, 5]),
         ("NaN", np.where(A == A[0, 0], np.nan, A)),
@@ -404,19 +429,7 @@ def build_api_cases(tmp: Path) -> None:
         ("strings", "abc"),
         ("ragged", [[1, 1, 1], [2, 2]]),
     ):
-        api(
-            "geometry",
-            f"evaluate_layout(anchors {label})",
-            "anchors",
-            lambda a=lay: evaluate_layout(ROOM, a, nodes=NODES),
-        )
-        if label != "3 anchors":  # 3 anchors are fine for ranges
-            api(
-                "geometry",
-                f"simulate_ranges(anchors {label})",
-                "anchors",
-                lambda a=lay: simulate_ranges(ROOM, a, NODES),
-            )
+        _bad_anchor_cases(label, lay, ranges=label != "3 anchors")  # 3 are fine for ranges
     api(
         "geometry",
         "refine_peb(anchors off the surfaces)",
@@ -460,6 +473,10 @@ def build_api_cases(tmp: Path) -> None:
         ),
         check=True,
     )
+
+
+def _bound_and_projection_cases() -> None:
+    """Geometry: bad points for the bound and the projection; a degenerate plan."""
     for label, kw in (
         ("sigma=-1", {"sigma": -1}),
         ("sigma='a'", {"sigma": "a"}),
@@ -507,7 +524,9 @@ def build_api_cases(tmp: Path) -> None:
         check=True,
     )
 
-    # -- absurd physics ----------------------------------------------------------------------
+
+def _room_physics_cases() -> None:
+    """Absurd physics: the room, the SNR."""
     for v in [1e9, -273.1, -41, 61, *BAD_REALS]:
         api("physics", f"Room(temperature={v!r})", "temperature", lambda v=v: Room(temperature=v))
     for v in [
@@ -571,6 +590,10 @@ def build_api_cases(tmp: Path) -> None:
             "snr_db",
             lambda v=v: analysis.PhysicalRangeNoise(ROOM, snr_db=v),
         )
+
+
+def _signal_physics_cases() -> None:
+    """Absurd physics: range σ, chirp and receiver."""
     for v in [0, -1, "0.04", np.nan, np.inf, 1e6, True]:
         api(
             "physics",
@@ -599,7 +622,9 @@ def build_api_cases(tmp: Path) -> None:
     ):
         api("physics", f"Receiver({arg}={v!r})", arg, lambda a=arg, v=v: Receiver(**{a: v}))
 
-    # TOML files through the library
+
+def _toml_library_cases(tmp: Path) -> None:
+    """TOML files through the library."""
     for fname, text, name in TOML_CASES:
         path = tmp / fname
         api(
@@ -609,7 +634,9 @@ def build_api_cases(tmp: Path) -> None:
             lambda p=path: Room.from_toml(p),
         )
 
-    # -- wrong exception types -------------------------------------------------------------
+
+def _wrong_type_cases(tmp: Path) -> None:
+    """Wrong exception types."""
     for v, name in (
         ({"size": 5}, "size"),
         (5, "room"),
@@ -689,6 +716,22 @@ def build_api_cases(tmp: Path) -> None:
     )
 
 
+def build_api_cases(tmp: Path) -> None:
+    """Every API case, by kind of bad input."""
+    _simulation_count_cases()
+    _optimizer_count_cases()
+    _plan_cases()
+    _ignored_option_cases()
+    _failed_result_cases()
+    _outside_and_duplicate_cases()
+    _degenerate_geometry_cases()
+    _bound_and_projection_cases()
+    _room_physics_cases()
+    _signal_physics_cases()
+    _toml_library_cases(tmp)
+    _wrong_type_cases(tmp)
+
+
 def build_neighbour_cases() -> None:
     """Wrong types for each argument of the public functions (the neighbours of the
     issue's examples): a string, an arbitrary object, a dict and NaN."""
@@ -708,7 +751,7 @@ def build_neighbour_cases() -> None:
         ),
         "evaluate_layout": (
             evaluate_layout,
-            {"room": ROOM, "anchors": A, "realizations": 1, "seed": 0, "nodes": S, "chunk": 1},
+            {"room": ROOM, "anchors": A, "realizations": 1, "rng": 0, "nodes": S, "chunk": 1},
         ),
         "locate": (locate, {"anchors": A, "ranges": np.ones((2, 4)), "max_iter": 100}),
         "noise_sigma": (noise_sigma, {"room": ROOM, "anchors": A, "snr_db": 30.0}),
@@ -725,7 +768,7 @@ def build_neighbour_cases() -> None:
         "calibrated_sigma": (analysis.calibrated_sigma, {"range_errors": np.ones((2, 3, 4))}),
         "dop": (
             analysis.dop,
-            {"position_errors": np.ones((2, 3)), "range_errors": np.ones((2, 3, 4))},
+            {"errors": np.ones((2, 3)), "range_errors": np.ones((2, 3, 4))},
         ),
         "candidate_grid": (placement.candidate_grid, {"room": ROOM, "spacing": 0.5}),
         "random_layout": (placement.random_layout, {"room": ROOM, "M": 4, "rng": 0}),
@@ -791,7 +834,8 @@ TOML_CASES = [
 
 
 # -- the CLI ------------------------------------------------------------------------------
-def build_cli_cases(tmp: Path) -> None:
+def _cli_file_cases(tmp: Path) -> None:
+    """CLI: room files, directories, missing files and outputs."""
     t = str(tmp)
     d = str(tmp / "adir")
     ok_layout = str(tmp / "ok.json")
@@ -846,7 +890,14 @@ def build_cli_cases(tmp: Path) -> None:
     cli("cli-files", ["report", f"{t}/goodresult", "--figures", f"{t}/afile.txt"], "--figures")
     for ck in ("null.json", "trunc.json", "list.json", "partial.json", "binary.json", "adir"):
         cli("cli-files", [*plan0, "--checkpoint", f"{t}/{ck}"], ck if ck != "adir" else "adir")
-    # numbers
+
+
+def _cli_number_cases(tmp: Path) -> None:
+    """CLI: numbers out of range or not numbers."""
+    t = str(tmp)
+    ok_layout = str(tmp / "ok.json")
+    out = str(tmp / "out")
+    plan0 = ["plan", "--no-progress", "--out", out]
     for opt, vals in (
         ("--anchors", ["3", "300", "0", "-4", "x", "4.5"]),
         ("--particles", ["1", "0", "-5", "3.7", "1000000000"]),
@@ -907,6 +958,12 @@ def build_cli_cases(tmp: Path) -> None:
     cli("cli-files", ["report", f"{t}/goodresult", "--out", f"{t}/r.txt"], "--out")
     cli("cli-numbers", ["frobnicate"], "frobnicate")
     cli("cli-numbers", [], "COMMAND")
+
+
+def build_cli_cases(tmp: Path) -> None:
+    """Every CLI case."""
+    _cli_file_cases(tmp)
+    _cli_number_cases(tmp)
 
 
 def make_files(tmp: Path) -> None:

@@ -40,7 +40,7 @@ def bench_relax(room, Ns, Ms, criteria, repeat, exhaustive_max):
             cand, desc = candidates(room, N)
             for M in Ms:
                 runs = [
-                    placement.relax_select(room, M, candidates=cand, criterion=criterion, seed=0)
+                    placement.relax_select(room, M, candidates=cand, criterion=criterion, rng=0)
                     for _ in range(repeat)
                 ]
                 cs = [r.compile_time + r.solve_time for r in runs]
@@ -57,11 +57,11 @@ def bench_relax(room, Ns, Ms, criteria, repeat, exhaustive_max):
                     solve_seconds=sel.solve_time,
                     rounding_seconds=sel.rounding_time,
                     total_seconds=sel.total_time,
-                    iterations=sel.details.get("iterations"),
-                    status=sel.status,
-                    value_m2=sel.value,
-                    lower_bound_m2=sel.lower_bound,
-                    relaxed_value_m2=sel.relaxed_value,
+                    iterations=sel.nit,
+                    status=sel.message,
+                    value_m2=sel.cost_m2,
+                    lower_bound_m2=sel.lower_bound_m2,
+                    relaxed_value_m2=sel.relaxed_cost_m2,
                     gap=sel.gap,
                     target_compile_solve_seconds=3.0 if len(cand) == 240 else None,
                 )
@@ -71,11 +71,11 @@ def bench_relax(room, Ns, Ms, criteria, repeat, exhaustive_max):
                         room, M, candidates=cand, criterion=criterion, max_subsets=n_sub
                     )
                     fields.update(
-                        exhaustive_m2=ex.value,
+                        exhaustive_m2=ex.cost_m2,
                         exhaustive_seconds=ex.solve_time,
-                        exhaustive_subsets=n_sub,
-                        value_over_exhaustive=sel.value / ex.value - 1,
-                        bound_below_exhaustive=bool(sel.lower_bound <= ex.value),
+                        exhaustive_subsets=ex.nfev,
+                        value_over_exhaustive=sel.cost_m2 / ex.cost_m2 - 1,
+                        bound_below_exhaustive=bool(sel.lower_bound_m2 <= ex.cost_m2),
                     )
                 emit("relax_select", **fields)
 
@@ -84,7 +84,7 @@ def bench_refine(room, M, seeds, relax_N):
     nodes = room.grid()
     starts = [(f"random_layout seed {s}", placement.random_layout(room, M, s)) for s in seeds]
     cand, desc = candidates(room, relax_N)
-    sel = placement.relax_select(room, M, candidates=cand, seed=0)
+    sel = placement.relax_select(room, M, candidates=cand, rng=0)
     starts.append((f"relax_select N={relax_N} ({desc})", sel.anchors))
     for hessian in ("limited-memory", "exact"):
         for name, a0 in starts:
@@ -97,12 +97,12 @@ def bench_refine(room, M, seeds, relax_N):
                 start=name,
                 hessian=hessian,
                 seconds=dt,
-                status=res.status,
-                iterations=res.iterations,
-                mean_peb_before_m=res.initial_mean_peb,
-                mean_peb_after_m=res.mean_peb,
-                max_peb_before_m=res.initial_max_peb,
-                max_peb_after_m=res.max_peb,
+                status=res.message,
+                iterations=res.nit,
+                mean_peb_before_m=res.initial_mean_peb_m,
+                mean_peb_after_m=res.mean_peb_m,
+                max_peb_before_m=res.initial_max_peb_m,
+                max_peb_after_m=res.max_peb_m,
                 mean_trinv_after_m2=float(analysis.crlb_trace(res.anchors, nodes, 0.04).mean()),
                 on_surfaces=bool(placement.on_surfaces(room, res.anchors).all()),
                 target_seconds=1.0,
@@ -117,7 +117,7 @@ def main() -> None:
         "--exhaustive-max",
         type=int,
         default=1_000_000,
-        help="run the exhaustive search when C(N, M) is at most this (~5 µs per subset)",
+        help="run the exhaustive search when C(N, M) is at most this",
     )
     ap.add_argument("--quick", action="store_true", help="N = 60 and 240, M = 4 and 8 only")
     args = ap.parse_args()

@@ -35,6 +35,7 @@ def main() -> None:
         ),
         "error_cdfs_4_panels": lambda: F.error_cdfs(err, axerr),
         "bound_gap_cdfs": lambda: F.bound_gap_cdfs(peb, rmse),
+        "plan_view": lambda: F.plan_view(room, opt),
         "dop_difference_layers": lambda: F.dop_difference(
             room, nodes, 2.5 + rng.random(270), 1.7 + rng.random(270)
         ),

@@ -36,10 +36,13 @@ from simulation import Room, evaluate_layout
 from simulation.evaluation import RangingScene
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import noise_sigma
-from simulation.peer import pra_windows
 from simulation.positioning import locate
 from simulation.received import synthesize, synthesize_direct
 from simulation.receiver import dsp_for, reference_chain
+
+# the pyroomacoustics peer is test code (tests/peer.py), not part of the package
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from peer import pra_windows
 
 R500_CHILD = """
 import json, resource, time, sys
@@ -47,11 +50,12 @@ sys.path.insert(0, {root!r})
 from simulation import Room, evaluate_layout
 room = Room.techtile()
 t0, c0 = time.perf_counter(), time.process_time()
-ev = evaluate_layout(room, room.corners_layout(), realizations=500, seed=0, workers={workers})
+ev = evaluate_layout(room, room.corners_layout(), realizations=500, rng=0, workers={workers})
 dt, cpu = time.perf_counter() - t0, time.process_time() - c0
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 print(json.dumps({{"seconds": dt, "cpu_seconds": cpu, "peak_rss_bytes": rss,
                   "std": ev.std, "mean": ev.mean, "p95": ev.p95, "mean_dop": float(ev.dop.mean()),
+                  "mean_dop_rms": float(ev.dop_rms.mean()),
                   "n_unconverged": ev.n_unconverged}}))
 """
 

@@ -51,12 +51,20 @@ def unique(recs, name, keys):
     return list(seen.values())
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--dir", default="docs/benchmarks")
-    d = Path(ap.parse_args().dir)
-    R = load(d / "results.jsonl")
+def _dop_cells(r: dict) -> list[str]:
+    """Mean / median of the paper's DOP (σ/σ_r) and of the RMS-based one (RMSE/σ_r).
 
+    Records with ``mean_dop_rms`` carry both (``mean_dop`` is then the paper's DOP); in
+    older records ``mean_dop`` was the RMS-based DOP and the paper's is unknown."""
+    if "mean_dop_rms" in r:
+        paper = (r.get("mean_dop"), r.get("median_dop"))
+        rms = (r.get("mean_dop_rms"), r.get("median_dop_rms"))
+    else:
+        paper, rms = (None, None), (r.get("mean_dop"), r.get("median_dop"))
+    return [f(paper[0], 2), f(paper[1], 2), f(rms[0], 2), f(rms[1], 2)]
+
+
+def section_a(R: list[dict]) -> None:
     print("### (a) corners versus optimized, M = 4\n")
     names = {"corners": "corners", "pso": "paper-PSO", "stp": "seed_then_pso"}
     rows = []
@@ -71,32 +79,19 @@ def main() -> None:
                     f(r["paper_std"]),
                     f(r["mean"]),
                     f(r["p95"]),
-                    f(r["mean_dop"], 2),
-                    f(r["median_dop"], 2),
+                    *_dop_cells(r),
                     f(r["mean_dop_precision"], 2),
                     f(r["paper_mean_dop"], 2),
                     f(r["robust_range_sigma"], 4),
                 ]
             )
-    print(
-        table(
-            [
-                "layout",
-                "R",
-                "σ (m)",
-                "paper σ",
-                "mean (m)",
-                "P95 (m)",
-                "mean DOP",
-                "median DOP",
-                "mean precision DOP",
-                "paper mean DOP",
-                "robust σ_r (m)",
-            ],
-            rows,
-        )
-    )
+    head = ["layout", "R", "σ (m)", "paper σ", "mean (m)", "P95 (m)"]
+    head += ["mean DOP (paper: σ/σ_r)", "median DOP (paper)", "mean DOP_RMS (RMSE/σ_r)"]
+    head += ["median DOP_RMS", "mean precision DOP", "paper mean DOP", "robust σ_r (m)"]
+    print(table(head, rows))
 
+
+def section_b(R: list[dict]) -> None:
     print("\n### (b) Table I\n")
     rows = []
     for r in sorted(
@@ -116,23 +111,12 @@ def main() -> None:
                 f"{r['pso_iterations']} / {r['max_iterations']}",
             ]
         )
-    print(
-        table(
-            [
-                "M",
-                "method",
-                "seed",
-                "R",
-                "σ ours / paper (m)",
-                "mean ours / paper (m)",
-                "P95 ours / paper (m)",
-                "below paper?",
-                "PSO iterations run / max",
-            ],
-            rows,
-        )
-    )
+    head = ["M", "method", "seed", "R", "σ ours / paper (m)", "mean ours / paper (m)"]
+    head += ["P95 ours / paper (m)", "below paper?", "PSO iterations run / max"]
+    print(table(head, rows))
 
+
+def section_c(R: list[dict]) -> None:
     print("\n### (c) bound-driven versus simulation-driven\n")
     rows = []
     order = {"PEB-optimal": 0, "paper-PSO": 1, "seed_then_pso": 2}
@@ -155,147 +139,110 @@ def main() -> None:
                 f(r["seconds_to_obtain"], 1),
             ]
         )
-    print(
-        table(
-            [
-                "M",
-                "layout",
-                "mean PEB (m)",
-                "σ (m)",
-                "mean (m)",
-                "P95 (m)",
-                "RMSE/PEB q5 / q25 / q50 / q75 / q95",
-                "nodes RMSE > 2 PEB",
-                "ranges |err| > 0.2 m",
-                "seconds to obtain",
-            ],
-            rows,
-        )
-    )
+    head = ["M", "layout", "mean PEB (m)", "σ (m)", "mean (m)", "P95 (m)"]
+    head += ["RMSE/PEB q5 / q25 / q50 / q75 / q95", "nodes RMSE > 2 PEB"]
+    head += ["ranges |err| > 0.2 m", "seconds to obtain"]
+    print(table(head, rows))
 
+
+def section_d(R: list[dict]) -> None:
     print("\n### (d) speed\n")
-    rows = []
-    for r in R:
-        if r["bench"] == "swarm_batch" and "serial_seconds" in r:
-            rows.append(
-                [
-                    r["M"],
-                    r["particles"],
-                    f(r["serial_seconds"], 2),
-                    f(r["pool_seconds"], 2),
-                    f(r["speedup"], 2),
-                    f(r["seconds_per_evaluation_serial"], 3),
-                    f(r["same_costs"]),
-                    f(r["load_average"][0], 1),
-                ]
-            )
-    print(
-        table(
-            [
-                "M",
-                "layouts",
-                "serial (s)",
-                "ProcessPoolExecutor(2) (s)",
-                "speed-up",
-                "s / evaluation (serial)",
-                "identical costs",
-                "load average (1 min)",
-            ],
-            rows,
-        )
-    )
+    rows = [
+        [
+            r["M"],
+            r["particles"],
+            f(r["serial_seconds"], 2),
+            f(r["pool_seconds"], 2),
+            f(r["speedup"], 2),
+            f(r["seconds_per_evaluation_serial"], 3),
+            f(r["same_costs"]),
+            f(r["load_average"][0], 1),
+        ]
+        for r in R
+        if r["bench"] == "swarm_batch" and "serial_seconds" in r
+    ]
+    head = ["M", "layouts", "serial (s)", "ProcessPoolExecutor(2) (s)", "speed-up"]
+    head += ["s / evaluation (serial)", "identical costs", "load average (1 min)"]
+    print(table(head, rows))
     print()
-    rows = []
-    for r in sorted(
-        unique(R, "pso_speed", ("M", "method", "seed")), key=lambda r: (r["M"], r["method"])
-    ):
-        rows.append(
-            [
-                r["M"],
-                r["method"],
-                f"{r['nit']}",
-                r["nfev"],
-                f(r["pso_seconds"], 1),
-                f(r["seconds_per_iteration"], 2),
-                f(r["seconds_per_evaluation"], 3),
-                f(r["seeding_seconds"], 1),
-            ]
+    rows = [
+        [
+            r["M"],
+            r["method"],
+            f"{r['nit']}",
+            r["nfev"],
+            f(r["pso_seconds"], 1),
+            f(r["seconds_per_iteration"], 2),
+            f(r["seconds_per_evaluation"], 3),
+            f(r["seeding_seconds"], 1),
+        ]
+        for r in sorted(
+            unique(R, "pso_speed", ("M", "method", "seed")), key=lambda r: (r["M"], r["method"])
         )
-    print(
-        table(
-            [
-                "M",
-                "method",
-                "iterations",
-                "evaluations",
-                "PSO (s)",
-                "s / iteration",
-                "s / evaluation (wall, pool)",
-                "seeding (s)",
-            ],
-            rows,
-        )
-    )
+    ]
+    head = ["M", "method", "iterations", "evaluations", "PSO (s)", "s / iteration"]
+    head += ["s / evaluation (wall, pool)", "seeding (s)"]
+    print(table(head, rows))
 
+
+def simulator(S: list[dict]) -> None:
+    print("\n### simulator (bench_simulator.py)\n")
+    for r in S:
+        if r["bench"] in ("layout_time", "pra_pipeline", "r500"):
+            keep = {k: v for k, v in r.items() if k not in ("python", "machine")}
+            print("-", json.dumps(keep))
+
+
+def analytic(A: list[dict]) -> None:
+    print("\n### relaxation and refinement (bench_analytic.py)\n")
+    rows = [
+        [
+            r["criterion"],
+            r["N"],
+            r["M"],
+            f(r["compile_solve_seconds_best"], 2),
+            f(r["total_seconds"], 2),
+            f(r["gap"], 4),
+            f(r.get("value_over_exhaustive"), 4),
+        ]
+        for r in A
+        if r["bench"] == "relax_select"
+    ]
+    head = ["criterion", "N", "M", "compile+solve best (s)", "total (s)", "certified gap"]
+    print(table([*head, "vs exhaustive"], rows))
+    print()
+    rows = [
+        [
+            r["M"],
+            r["start"],
+            r["hessian"],
+            f(r["seconds"], 2),
+            r["status"],
+            f(r["mean_peb_before_m"], 4),
+            f(r["mean_peb_after_m"], 4),
+        ]
+        for r in A
+        if r["bench"] == "refine_peb"
+    ]
+    head = ["M", "start", "Hessian", "seconds", "status", "mean PEB before (m)", "after (m)"]
+    print(table(head, rows))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--dir", default="docs/benchmarks")
+    d = Path(ap.parse_args().dir)
+    R = load(d / "results.jsonl")
+    section_a(R)
+    section_b(R)
+    section_c(R)
+    section_d(R)
     S = load(d / "bench_simulator.jsonl")
     if S:
-        print("\n### simulator (bench_simulator.py)\n")
-        for r in S:
-            if r["bench"] in ("layout_time", "pra_pipeline", "r500"):
-                keep = {k: v for k, v in r.items() if k not in ("python", "machine")}
-                print("-", json.dumps(keep))
+        simulator(S)
     A = load(d / "bench_analytic.jsonl")
     if A:
-        print("\n### relaxation and refinement (bench_analytic.py)\n")
-        rows = []
-        for r in A:
-            if r["bench"] == "relax_select":
-                rows.append(
-                    [
-                        r["criterion"],
-                        r["N"],
-                        r["M"],
-                        f(r["compile_solve_seconds_best"], 2),
-                        f(r["total_seconds"], 2),
-                        f(r["gap"], 4),
-                        f(r.get("value_over_exhaustive"), 4),
-                    ]
-                )
-        print(
-            table(
-                [
-                    "criterion",
-                    "N",
-                    "M",
-                    "compile+solve best (s)",
-                    "total (s)",
-                    "certified gap",
-                    "vs exhaustive",
-                ],
-                rows,
-            )
-        )
-        print()
-        rows = []
-        for r in A:
-            if r["bench"] == "refine_peb":
-                rows.append(
-                    [
-                        r["M"],
-                        r["start"],
-                        r["hessian"],
-                        f(r["seconds"], 2),
-                        r["status"],
-                        f(r["mean_peb_before_m"], 4),
-                        f(r["mean_peb_after_m"], 4),
-                    ]
-                )
-        print(
-            table(
-                ["M", "start", "Hessian", "seconds", "status", "mean PEB before (m)", "after (m)"],
-                rows,
-            )
-        )
+        analytic(A)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ from placement.plan import PlacementResult, SeedLayout, seed_then_pso
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.refine import RefineResult, refine_peb
 from placement.relaxation import Selection, relax_select
+from placement.result import LayoutResult
 from placement.surfaces import (
     MountingSurface,
     aim,
@@ -19,6 +20,7 @@ from placement.surfaces import (
     candidate_grid,
     from_uv,
     mounting_surfaces,
+    naive_layout,
     on_surfaces,
     project,
     random_layout,
@@ -38,6 +40,7 @@ __all__ = [
     "pso",
     "seed_then_pso",
     "ExhaustiveResult",
+    "LayoutResult",
     "MountingSurface",
     "RefineResult",
     "Selection",
@@ -50,6 +53,7 @@ __all__ = [
     "exhaustive_search",
     "from_uv",
     "mounting_surfaces",
+    "naive_layout",
     "on_surfaces",
     "project",
     "random_layout",

@@ -18,19 +18,17 @@ mapped over the P nodes (``Function.map``), and is either
   (``temperature`` τ in metres; default 5 % of the initial mean PEB).
 
 Gradients are exact (reverse-mode AD through the map). IPOPT's default here is its
-limited-memory quasi-Newton Hessian (history 20), because it is 2–4× faster than the exact
-one for this small, dense problem: the exact 2M × 2M Hessian costs ~20 ms per evaluation
-at M = 10 on 270 nodes (benchmarks/bench_analytic.py: 0.16–0.52 s vs 0.78–1.24 s from
-random layouts, reaching the same mean PEB within 1.5 %); ``hessian="exact"`` gives
-IPOPT the exact Hessian, from the
-per-node SX Hessian mapped and summed over the nodes (plus the log-mean-exp curvature
-term for "smoothmax").
+limited-memory quasi-Newton Hessian (history 20), faster than the exact one for this
+small, dense problem (measurements: docs/implementation.md); ``hessian="exact"`` gives
+IPOPT the exact Hessian, from the per-node SX Hessian mapped and summed over the nodes
+(plus the log-mean-exp curvature term for "smoothmax").
 
 σ is normalized to 1 inside (σ_j/σ_ref, σ_ref their geometric mean) and rescaled. The
 refinement is local: ``multistart`` adds random starts (uniform on each anchor's own
 rectangle) and keeps the best. IPOPT output is silenced unless ``verbose``. A failed solve,
 a singular start (a node with PEB = inf) or a result no better than the start is reported
-in ``status`` and the input layout is returned unchanged.
+in ``status`` (:attr:`RefineResult.STATUS`) and ``message``, and the input layout is
+returned unchanged.
 """
 
 from __future__ import annotations
@@ -38,10 +36,12 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from analysis.fim import peb
+from placement.result import LayoutResult
 from placement.surfaces import allowed, allowed_rectangles, from_uv, mounting_surfaces, to_uv
 from simulation import checks
 from simulation.room import Room, as_room
@@ -56,57 +56,50 @@ _STOPPED = ("Maximum_Iterations_Exceeded", "Maximum_CpuTime_Exceeded")
 
 
 @dataclass(frozen=True)
-class RefineResult:
-    """Outcome of :func:`refine_peb`.
+class RefineResult(LayoutResult):
+    """Outcome of :func:`refine_peb` (:mod:`placement.result` convention).
 
     anchors : (M, 3) refined layout (m), or the input when not ``accepted``.
     initial_anchors : (M, 3) the input layout.
-    objective : "mean" or "smoothmax"; value / initial_value: that objective (m) at the
-        returned and at the input layout (PEB = √tr J⁻¹ per node).
-    mean_peb, max_peb, initial_mean_peb, initial_max_peb : mean and max over the nodes of
-        PEB (m) after and before.
-    status : IPOPT's return status of the kept start, or "singular_start",
-        "no_improvement", "error: …". success : IPOPT converged (for the kept start).
-    accepted : the returned anchors differ from the input (converged, or stopped early
-        with an improvement). iterations : IPOPT iterations of the kept start.
+    objective : "mean" or "smoothmax"; objective_m (= ``fun``) / initial_objective_m: that
+        objective (m) at the returned and at the input layout (PEB = √tr J⁻¹ per node).
+    mean_peb_m, max_peb_m, initial_mean_peb_m, initial_max_peb_m : mean and max over the
+        nodes of PEB (m) after and before.
+    success : IPOPT converged for the kept start. accepted : the returned anchors differ
+        from the input (status 0 or 1).
+    status, message : the code of :attr:`STATUS`, and IPOPT's return status of the kept
+        start or the reason ("singular_start", "no_improvement", "error: …").
+    nit : IPOPT iterations of the kept start; nfev : objective evaluations over all starts.
     starts : number of starts; solve_time : wall-clock seconds of the whole call.
     """
+
+    FUN: ClassVar[str] = "objective_m"
+    STATUS: ClassVar[dict[int, str]] = {
+        0: "converged: IPOPT converged and the layout improved",
+        1: "stopped: IPOPT hit its iteration or time limit; the layout improved",
+        2: "no_improvement: no start improved on the input, which is returned",
+        3: "singular_start: a node has PEB = inf at the input; nothing to refine",
+        4: "duplicate_anchors: the refined anchors coincide; the input is returned",
+        5: "failed: CasADi or IPOPT failed for every start; the input is returned",
+    }
 
     anchors: np.ndarray
     initial_anchors: np.ndarray
     objective: str
-    value: float
-    initial_value: float
-    mean_peb: float
-    max_peb: float
-    initial_mean_peb: float
-    initial_max_peb: float
-    status: str
+    objective_m: float
+    initial_objective_m: float
+    mean_peb_m: float
+    max_peb_m: float
+    initial_mean_peb_m: float
+    initial_max_peb_m: float
     success: bool
     accepted: bool
-    iterations: int
+    status: int
+    message: str
+    nit: int
+    nfev: int
     starts: int
     solve_time: float
-
-    def to_dict(self) -> dict:
-        """Plain JSON-serializable dictionary (arrays as lists)."""
-        return {
-            "anchors": self.anchors.tolist(),
-            "initial_anchors": self.initial_anchors.tolist(),
-            "objective": self.objective,
-            "value": self.value,
-            "initial_value": self.initial_value,
-            "mean_peb": self.mean_peb,
-            "max_peb": self.max_peb,
-            "initial_mean_peb": self.initial_mean_peb,
-            "initial_max_peb": self.initial_max_peb,
-            "status": self.status,
-            "success": self.success,
-            "accepted": self.accepted,
-            "iterations": self.iterations,
-            "starts": self.starts,
-            "solve_time": self.solve_time,
-        }
 
 
 def _objective_value(pebs: np.ndarray, objective: str, tau: float) -> float:
@@ -185,6 +178,125 @@ def _build_solver(node, derivs, nodes, M, objective, tau_n, opts):
     return ca.nlpsol("refine_peb", "ipopt", {"x": x, "f": f}, nlp_opts)
 
 
+@dataclass(frozen=True)
+class _Problem:
+    """The checked inputs of :func:`refine_peb`."""
+
+    room: Room
+    a0: np.ndarray
+    nodes: np.ndarray
+    sigma: np.ndarray
+    objective: str
+    tau: float | None
+    peb0: np.ndarray
+    f0: float
+
+    @property
+    def M(self) -> int:
+        return self.a0.shape[0]
+
+    def result(self, anchors, code, message, success, nit=0, nfev=0, starts=0, t0=0.0):
+        """The :class:`RefineResult` of returning ``anchors``."""
+        pe = peb(anchors, self.nodes, self.sigma)
+        return RefineResult(
+            anchors=np.array(anchors, dtype=float),
+            initial_anchors=self.a0.copy(),
+            objective=self.objective,
+            objective_m=_objective_value(pe, self.objective, self.tau),
+            initial_objective_m=self.f0,
+            mean_peb_m=float(pe.mean()),
+            max_peb_m=float(pe.max()),
+            initial_mean_peb_m=float(self.peb0.mean()),
+            initial_max_peb_m=float(self.peb0.max()),
+            success=success,
+            accepted=code in (0, 1),
+            status=code,
+            message=message,
+            nit=nit,
+            nfev=nfev,
+            starts=starts,
+            solve_time=time.perf_counter() - t0,
+        )
+
+
+def _problem(room, anchors, sigma, objective, nodes, temperature) -> _Problem:
+    """Check the layout, nodes, σ and objective; PEB and objective at the start."""
+    room = as_room(room)
+    a0 = room.check_anchors(checks.reals("anchors", anchors), min_anchors=4)
+    checks.distinct("anchors", a0)
+    M = a0.shape[0]
+    if not np.all(allowed(room, a0, tol=1e-6)):
+        raise ValueError(
+            f"anchors: every anchor must lie on an allowed mounting surface {list(room.mounting)}"
+            " outside the keep-outs (use placement.project)"
+        )
+    checks.choice("objective", objective, OBJECTIVES)
+    p = room.grid() if nodes is None else checks.points("nodes", nodes)
+    checks.inside("nodes", p, room.size)
+    s = checks.reals("sigma", sigma)
+    s = np.full(M, float(s)) if s.ndim == 0 else s
+    if s.shape != (M,) or not (np.all(np.isfinite(s)) and np.all(s > 0)):
+        raise ValueError(f"sigma: expected finite values > 0 m, scalar or shape ({M},)")
+    peb0 = peb(a0, p, s)
+    tau = None
+    if objective == "smoothmax":
+        if temperature is None:
+            tau = 0.05 * float(peb0.mean()) if np.all(np.isfinite(peb0)) else 1.0
+        else:
+            tau = checks.real("temperature", temperature, low=0.0, low_open=True, unit="m")
+    f0 = _objective_value(peb0, objective, tau)
+    return _Problem(room, a0, p, s, objective, tau, peb0, f0)
+
+
+def _variables(room: Room, a0: np.ndarray):
+    """The (u, v) variables of every anchor on its own allowed rectangle, a = C x + c0:
+    (surface index (M,), C (3M, 2M), c0 (3M,), lower (2M,), upper (2M,), start x0 (2M,))."""
+    M = a0.shape[0]
+    idx, uv = to_uv(room, a0, tol=1e-6)
+    surfs = mounting_surfaces(room)
+    rlo, rhi, ridx = allowed_rectangles(room)
+    C = np.zeros((3 * M, 2 * M))
+    c0 = np.zeros(3 * M)
+    lbx, ubx = np.empty(2 * M), np.empty(2 * M)
+    for j, k in enumerate(idx):
+        sf = surfs[k]
+        c0[3 * j + sf.axis] = sf.offset
+        C[3 * j + sf.uv_axes[0], 2 * j] = C[3 * j + sf.uv_axes[1], 2 * j + 1] = 1.0
+        # the largest allowed rectangle of its surface holding the start, else the nearest
+        lo, hi = rlo[ridx == k][:, sf.uv_axes], rhi[ridx == k][:, sf.uv_axes]
+        gap = np.linalg.norm(np.clip(uv[j], lo, hi) - uv[j], axis=-1)
+        r = int(np.argmax(gap <= 1e-6)) if np.any(gap <= 1e-6) else int(np.argmin(gap))
+        lbx[2 * j : 2 * j + 2], ubx[2 * j : 2 * j + 2] = lo[r], hi[r]
+    return idx, C, c0, lbx, ubx, np.clip(uv.ravel(), lbx, ubx)
+
+
+def _solve_starts(solver, starts, lbx, ubx, layout, prob: _Problem):
+    """Run IPOPT from every start; (best or None, last status, nfev) with best =
+    (objective m, anchors, IPOPT status, converged, iterations)."""
+    best, last_status, nfev = None, "no_start", 0
+    for xs in starts:
+        try:
+            sol = solver(x0=xs, lbx=lbx, ubx=ubx)
+            stats = solver.stats()
+            status = str(stats.get("return_status", "unknown"))
+            iters = int(stats.get("iter_count", 0))
+            nfev += int(stats.get("n_call_nlp_f", 0))
+            x = np.clip(np.asarray(sol["x"], dtype=float).ravel(), lbx, ubx)
+        except RuntimeError as exc:
+            log.warning("refine_peb: IPOPT failed: %s", exc)
+            last_status = f"error: {exc}"
+            continue
+        last_status = status
+        success = status in _SUCCESS
+        if not (success or status in _STOPPED) or not np.all(np.isfinite(x)):
+            continue
+        cand = layout(x)
+        val = _objective_value(peb(cand, prob.nodes, prob.sigma), prob.objective, prob.tau)
+        if np.isfinite(val) and (best is None or val < best[0]):
+            best = (val, cand, status, success, iters)
+    return best, last_status, nfev
+
+
 def refine_peb(
     room: Room,
     anchors,
@@ -193,7 +305,7 @@ def refine_peb(
     objective: str = "mean",
     nodes=None,
     multistart: int = 0,
-    seed=None,
+    rng=None,
     verbose: bool = False,
     hessian: str = "limited-memory",
     temperature: float | None = None,
@@ -211,7 +323,8 @@ def refine_peb(
     objective : "mean" (mean over nodes of PEB = √tr J⁻¹) or "smoothmax" (log-mean-exp).
     nodes : (P, 3) evaluation nodes (m); default ``room.grid()``.
     multistart : extra random starts (each anchor uniform on its own allowed rectangle).
-    seed : seed or ``numpy.random.Generator`` for the extra starts.
+    rng : an int seed, a ``numpy.random.Generator`` or None (fresh entropy) for the extra
+        starts.
     verbose : let IPOPT print its log.
     hessian : "limited-memory" (default, faster) or "exact" (AD Hessian).
     temperature : τ (m) of "smoothmax"; default 5 % of the initial mean PEB.
@@ -222,83 +335,25 @@ def refine_peb(
     :class:`RefineResult` when ``return_info``. Bad input raises ``ValueError``.
     """
     t0 = time.perf_counter()
-    room = as_room(room)
-    a0 = room.check_anchors(checks.reals("anchors", anchors), min_anchors=4)
-    checks.distinct("anchors", a0)
-    M = a0.shape[0]
-    if not np.all(allowed(room, a0, tol=1e-6)):
-        raise ValueError(
-            f"anchors: every anchor must lie on an allowed mounting surface {list(room.mounting)}"
-            " outside the keep-outs (use placement.project)"
-        )
-    checks.choice("objective", objective, OBJECTIVES)
+    prob = _problem(room, anchors, sigma, objective, nodes, temperature)
     checks.choice("hessian", hessian, ("limited-memory", "exact"))
     multistart = checks.count("multistart", multistart, low=0, high=10_000)
     max_iter = checks.count("max_iter", max_iter, low=1, high=1_000_000)
     tol = checks.real("tol", tol, low=0.0, low_open=True)
-    p = room.grid() if nodes is None else checks.points("nodes", nodes)
-    checks.inside("nodes", p, room.size)
     verbose = checks.flag("verbose", verbose)
     return_info = checks.flag("return_info", return_info)
-    s = checks.reals("sigma", sigma)
-    s = np.full(M, float(s)) if s.ndim == 0 else s
-    if s.shape != (M,) or not (np.all(np.isfinite(s)) and np.all(s > 0)):
-        raise ValueError(f"sigma: expected finite values > 0 m, scalar or shape ({M},)")
-    s_ref = float(np.exp(np.mean(np.log(s))))
+    rng = checks.rng("rng", rng)
+    res = _refine(prob, multistart, rng, verbose, hessian, max_iter, tol, t0)
+    return res if return_info else res.anchors
 
-    peb0 = peb(a0, p, s)
-    tau = None
-    if objective == "smoothmax":
-        if temperature is None:
-            tau = 0.05 * float(peb0.mean()) if np.all(np.isfinite(peb0)) else 1.0
-        else:
-            tau = checks.real("temperature", temperature, low=0.0, low_open=True, unit="m")
-    f0 = _objective_value(peb0, objective, tau)
 
-    def result(anchors, status, success, accepted, iterations, starts):
-        pe = peb(anchors, p, s)
-        return RefineResult(
-            anchors=np.array(anchors, dtype=float),
-            initial_anchors=a0.copy(),
-            objective=objective,
-            value=_objective_value(pe, objective, tau),
-            initial_value=f0,
-            mean_peb=float(pe.mean()),
-            max_peb=float(pe.max()),
-            initial_mean_peb=float(peb0.mean()),
-            initial_max_peb=float(peb0.max()),
-            status=status,
-            success=success,
-            accepted=accepted,
-            iterations=iterations,
-            starts=starts,
-            solve_time=time.perf_counter() - t0,
-        )
-
-    def done(res: RefineResult):
-        return res if return_info else res.anchors
-
-    if not np.isfinite(f0):
-        return done(result(a0, "singular_start", False, False, 0, 0))
-
-    # variables: (u, v) of every anchor on its own rectangle; a = C x + c0
-    idx, uv = to_uv(room, a0, tol=1e-6)
-    surfs = mounting_surfaces(room)
-    rlo, rhi, ridx = allowed_rectangles(room)
-    C = np.zeros((3 * M, 2 * M))
-    c0 = np.zeros(3 * M)
-    lbx, ubx = np.empty(2 * M), np.empty(2 * M)
-    for j, k in enumerate(idx):
-        sf = surfs[k]
-        c0[3 * j + sf.axis] = sf.offset
-        C[3 * j + sf.uv_axes[0], 2 * j] = C[3 * j + sf.uv_axes[1], 2 * j + 1] = 1.0
-        # the largest allowed rectangle of its surface holding the start, else the nearest
-        lo, hi = rlo[ridx == k][:, sf.uv_axes], rhi[ridx == k][:, sf.uv_axes]
-        gap = np.linalg.norm(np.clip(uv[j], lo, hi) - uv[j], axis=-1)
-        r = int(np.argmax(gap <= 1e-6)) if np.any(gap <= 1e-6) else int(np.argmin(gap))
-        lbx[2 * j : 2 * j + 2], ubx[2 * j : 2 * j + 2] = lo[r], hi[r]
-    x0 = np.clip(uv.ravel(), lbx, ubx)
-
+def _refine(prob: _Problem, multistart, rng, verbose, hessian, max_iter, tol, t0):
+    """Build the CasADi problem, run IPOPT from every start, keep the best improvement."""
+    a0, M = prob.a0, prob.M
+    if not np.isfinite(prob.f0):
+        return prob.result(a0, 3, "singular_start", False, t0=t0)
+    idx, C, c0, lbx, ubx, x0 = _variables(prob.room, a0)
+    s_ref = float(np.exp(np.mean(np.log(prob.sigma))))
     opts = {
         "ipopt.print_level": 5 if verbose else 0,
         "print_time": bool(verbose),
@@ -307,46 +362,26 @@ def refine_peb(
         "ipopt.tol": float(tol),
         "error_on_fail": False,
     }
+    tau_n = None if prob.tau is None else prob.tau / s_ref
     try:
-        node, derivs = _node_function(M, C, c0, (s_ref / s) ** 2, hessian == "exact")
-        solver = _build_solver(
-            node, derivs, p, M, objective, None if tau is None else tau / s_ref, opts
-        )
+        node, derivs = _node_function(M, C, c0, (s_ref / prob.sigma) ** 2, hessian == "exact")
+        solver = _build_solver(node, derivs, prob.nodes, M, prob.objective, tau_n, opts)
     except RuntimeError as exc:  # CasADi reports its failures as RuntimeError
         log.warning("refine_peb: could not build the CasADi problem: %s", exc)
-        return done(result(a0, f"error: {exc}", False, False, 0, 0))
-
-    rng = checks.rng("seed", seed)
+        return prob.result(a0, 5, f"error: {exc}", False, t0=t0)
     starts = [x0] + [rng.uniform(lbx, ubx) for _ in range(int(multistart))]
-    best = None  # (value, anchors, status, success, iterations)
-    last_status = "no_start"
-    for xs in starts:
-        try:
-            sol = solver(x0=xs, lbx=lbx, ubx=ubx)
-            stats = solver.stats()
-            status = str(stats.get("return_status", "unknown"))
-            iters = int(stats.get("iter_count", 0))
-            x = np.clip(np.asarray(sol["x"], dtype=float).ravel(), lbx, ubx)
-        except RuntimeError as exc:
-            log.warning("refine_peb: IPOPT failed: %s", exc)
-            last_status = f"error: {exc}"
-            continue
-        last_status = status
-        success = status in _SUCCESS
-        if not (success or status in _STOPPED) or not np.all(np.isfinite(x)):
-            continue
-        cand = from_uv(room, idx, x.reshape(M, 2))
-        val = _objective_value(peb(cand, p, s), objective, tau)
-        if np.isfinite(val) and (best is None or val < best[0]):
-            best = (val, cand, status, success, iters)
-
+    n = len(starts)
+    best, last_status, nfev = _solve_starts(
+        solver, starts, lbx, ubx, lambda x: from_uv(prob.room, idx, x.reshape(M, 2)), prob
+    )
     if best is None:
-        return done(result(a0, last_status, False, False, 0, len(starts)))
+        return prob.result(a0, 5, last_status, False, nfev=nfev, starts=n, t0=t0)
     val, cand, status, success, iters = best
     try:  # anchors moved onto each other: not a valid layout
         checks.distinct("anchors", cand)
     except ValueError as exc:
-        return done(result(a0, f"duplicate_anchors: {exc}", False, False, iters, len(starts)))
-    if not val < f0:
-        return done(result(a0, "no_improvement", success, False, iters, len(starts)))
-    return done(result(cand, status, success, True, iters, len(starts)))
+        message = f"duplicate_anchors: {exc}"
+        return prob.result(a0, 4, message, False, iters, nfev, n, t0)
+    if not val < prob.f0:
+        return prob.result(a0, 2, "no_improvement", success, iters, nfev, n, t0)
+    return prob.result(cand, 0 if success else 1, status, success, iters, nfev, n, t0)

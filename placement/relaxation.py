@@ -3,7 +3,7 @@
 Selecting anchors is a Boolean design problem: w ∈ {0, 1}^N, Σ w = M, with the FIM at
 node p affine in w, J_p(w) = Σ_n w_n u_pn u_pnᵀ/σ_n² (paper eq. 6). Relaxing w to [0, 1]^N
 gives a convex problem (cvxpy, solved by Clarabel) whose optimum lower-bounds every
-selection. Criteria, all *minimized* (see :mod:`placement.exhaustive` for the units):
+selection. Criteria, all *minimized* (see :mod:`placement.selection` for the units):
 
 * ``"A"``: mean over the nodes of tr J_p⁻¹ (m²). Each tr J_p⁻¹ is written with the Schur
   complement LMI [[X_p, I], [I, J_p(w)]] ⪰ 0 ⇔ X_p ⪰ J_p⁻¹, minimizing Σ tr X_p / P.
@@ -14,11 +14,11 @@ selection. Criteria, all *minimized* (see :mod:`placement.exhaustive` for the un
   the gap refer to that value (a gap g means Σ log det is 3P·log(1 + g) below the optimum).
   ``Selection.details`` also carries Σ_p log det J_p and its upper bound (log 1/m⁶).
 
-All P LMIs are one batched (P, 6, 6) PSD constraint built from a single sparse matrix, so
-cvxpy's canonicalization stays a few tenths of a second at N = 240, P = 270. σ is
-normalized to 1 inside the solver (σ_n/σ_ref with σ_ref the geometric mean) and the
-results are rescaled: with σ = 0.04 m left in the data (J ~ 10³/m²) Clarabel fails
-outright on "A" and "minimax" at N = 240 (measured).
+All P LMIs are one batched (P, 6, 6) PSD constraint built from a single sparse matrix,
+which keeps cvxpy's canonicalization short. σ is normalized to 1 inside the solver
+(σ_n/σ_ref with σ_ref the geometric mean) and the results are rescaled, because Clarabel
+fails on the unnormalized data (J ~ 10³/m²). Measurements behind these choices:
+docs/implementation.md.
 
 Certificate. The lower bound is not the solver's number: it is recomputed in numpy from the
 relaxed weights w* by convexity (the Frank–Wolfe / Lagrangian bound). For a convex f and
@@ -31,16 +31,17 @@ and over Ω = {0 ≤ w' ≤ 1, Σ w' = M} the last term is the sum of the M larg
 replaced by Σ_p λ_p tr J_p⁻¹ ≤ max_p tr J_p⁻¹ with λ the solver's dual multipliers
 (any λ in the simplex is valid). The bound equals the relaxed optimum when w* is optimal
 and is valid whatever the solver's accuracy; a solver that stops inaccurately only makes
-it looser, and that is reported in ``status``. If the bound cannot be computed (no
-solution, singular J) or exceeds the returned value, no certificate is returned:
-``lower_bound = 0`` (trivially true) and ``gap = inf``, with the reason in ``status``.
+it looser, and that is reported in ``status`` (1, "inaccurate"). If the bound cannot be
+computed (no solution, singular J) or exceeds the returned cost, no certificate is
+returned: ``lower_bound_m2 = 0`` (trivially true), ``gap = inf`` and ``success`` False,
+with the reason in ``status`` and ``message``.
 
 Rounding. Subsets are drawn without replacement with probabilities proportional to the
 weights (Gumbel-top-M, seeded), together with the top-M weights (random tie break); the
 ``starts`` best are improved by swap local search (each selected candidate in turn is
 replaced by the unselected one that lowers the value most, until a pass changes nothing).
-Top-M alone fails on symmetric rooms, where the relaxed weights tie (techtile, 60-point
-grid, M = 4: top-M 2.27 m² against the optimum 0.0064 m²). Singular subsets count as +inf.
+Top-M alone fails on symmetric rooms, where the relaxed weights tie (an example in
+docs/implementation.md). Singular subsets count as +inf.
 """
 
 from __future__ import annotations
@@ -49,15 +50,18 @@ import logging
 import time
 import warnings
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
-from placement.exhaustive import (
+from placement.result import LayoutResult
+from placement.selection import (
     DEFAULT_SPACING,
+    ENTRIES,
     ENTRY_WEIGHTS,
-    criterion_values,
     design_inputs,
     node_values,
+    subset_values,
 )
 from simulation import checks
 from simulation.room import Room
@@ -67,16 +71,13 @@ log = logging.getLogger(__name__)
 #: most candidate points of a relaxation (the problem has N weights and 36·P LMI entries)
 MAX_CANDIDATES = 5000
 
-#: (row, col) of the six unique entries (xx, yy, zz, xy, xz, yz) of a symmetric 3×3
-_IU = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 #: (row, col) of the six entries of a lower-triangular 3×3 Z (D criterion)
 _IL = ((0, 0), (1, 1), (2, 2), (1, 0), (2, 0), (2, 1))
-#: relative slack: a bound above value·(1 + this) is rejected as not verified
+#: relative slack: a bound above cost·(1 + this) is rejected as not verified
 _BOUND_RTOL = 1e-9
-#: Clarabel settings (``solver_opts`` overrides them). Chordal decomposition only splits the
-#: 6×6 LMIs and slows the solve; tolerances 10–100× looser than Clarabel's 1e-8 halve the
-#: iterations for "D" (33 → 15 at N = 240, M = 8) and loosen the certified bound by ~1e-6
-#: relative only, because the bound is recomputed from w* and does not trust the solver.
+#: Clarabel settings (``solver_opts`` overrides them): no chordal decomposition (it only
+#: splits the 6×6 LMIs) and tolerances 10–100× looser than Clarabel's 1e-8, which the
+#: certificate allows because the bound is recomputed from w* (docs/implementation.md).
 _CLARABEL_DEFAULTS = {
     "chordal_decomposition_enable": False,
     "tol_gap_rel": 1e-6,
@@ -87,41 +88,54 @@ _CLARABEL_DEFAULTS = {
 
 
 @dataclass(frozen=True)
-class Selection:
-    """Result of :func:`relax_select`.
+class Selection(LayoutResult):
+    """Result of :func:`relax_select` (:mod:`placement.result` convention).
 
     anchors : (M, 3) selected mounting points (m); indices : (M,) into ``candidates``.
     weights : (N,) relaxed weights in [0, 1] summing to M (NaN-free; zeros if the solver
         failed). candidates : (N, 3) the candidate set (m).
-    value : criterion value of the selection (m², see the module docstring).
-    lower_bound : certified lower bound on the best possible value over all M-subsets of
-        the candidates (m²); 0 when not certified. gap : (value − lower_bound)/lower_bound,
-        so value ≤ (1 + gap)·optimum; inf when not certified.
-    relaxed_value : criterion value of the fractional w* (≥ relaxed optimum ≥ bound).
-    status : "optimal" (solved, certificate verified), "inaccurate" (Clarabel stopped
-        inaccurate; the bound is still verified by convexity, possibly loose),
-        "bound_above_value", "singular_relaxation" or "solver_failed: …" (no certificate).
-    solver_status : cvxpy's status string (or the exception).
-    certified : whether ``lower_bound`` is a verified bound.
+    cost_m2 (= ``fun``) : criterion value of the selection (m², see the module docstring).
+    lower_bound_m2 : certified lower bound on the best possible cost over all M-subsets of
+        the candidates (m²); 0 when not certified. gap : (cost − lower_bound)/lower_bound,
+        so cost ≤ (1 + gap)·optimum; inf when not certified.
+    relaxed_cost_m2 : criterion value of the fractional w* (≥ relaxed optimum ≥ bound).
+    success : whether ``lower_bound_m2`` is a verified bound (status 0 or 1).
+    status, message : the code of :attr:`STATUS` and its text ("optimal", "inaccurate",
+        "bound_above_value", "singular_relaxation", "solver_failed: …").
+    solver_status : cvxpy's status string (or the exception). nit : Clarabel's iterations
+        (0 if unknown).
     compile_time, solve_time, rounding_time, total_time : wall-clock seconds (cvxpy
         problem build + canonicalization; Clarabel; rounding + local search; all).
-    details : solver iterations, the solver's own objective ``solver_value``,
-        ``relaxation_gap`` = relaxed_value/lower_bound − 1 (how accurately the relaxation
-        was solved; ~1e-6), and for "D" ``logdet_sum`` = Σ_p log det J_p of the selection
-        and ``logdet_upper_bound`` (log 1/m⁶).
+    sigma : the reference σ (m, geometric mean of the given σ) the solver normalized by.
+    details : the solver's own objective ``solver_value`` (m²), ``relaxation_gap`` =
+        relaxed_cost/lower_bound − 1 (how accurately the relaxation was solved; ~1e-6), and
+        for "D" ``logdet_sum`` = Σ_p log det J_p of the selection and ``logdet_upper_bound``
+        (log 1/m⁶).
     """
+
+    FUN: ClassVar[str] = "cost_m2"
+    STATUS: ClassVar[dict[int, str]] = {
+        0: "optimal: solved, certificate verified",
+        1: "inaccurate: Clarabel stopped inaccurate; the bound is still verified by "
+        "convexity, possibly loose",
+        2: "bound_above_value: the recomputed bound exceeds the cost; no certificate",
+        3: "singular_relaxation: a node's FIM is singular at w*; no certificate",
+        4: "solver_failed: no relaxed solution; rounding from uniform weights, no certificate",
+    }
 
     anchors: np.ndarray
     indices: np.ndarray
     weights: np.ndarray
-    value: float
-    lower_bound: float
+    cost_m2: float
+    lower_bound_m2: float
     gap: float
-    status: str
+    success: bool
+    status: int
+    message: str
+    nit: int
     solve_time: float
     criterion: str
-    relaxed_value: float
-    certified: bool
+    relaxed_cost_m2: float
     solver_status: str
     compile_time: float
     rounding_time: float
@@ -134,29 +148,6 @@ class Selection:
     def M(self) -> int:
         return int(self.indices.size)
 
-    def to_dict(self) -> dict:
-        """Plain JSON-serializable dictionary (arrays as lists; non-finite floats kept)."""
-        return {
-            "anchors": self.anchors.tolist(),
-            "indices": self.indices.tolist(),
-            "weights": self.weights.tolist(),
-            "value": self.value,
-            "lower_bound": self.lower_bound,
-            "gap": self.gap,
-            "status": self.status,
-            "solve_time": self.solve_time,
-            "criterion": self.criterion,
-            "relaxed_value": self.relaxed_value,
-            "certified": self.certified,
-            "solver_status": self.solver_status,
-            "compile_time": self.compile_time,
-            "rounding_time": self.rounding_time,
-            "total_time": self.total_time,
-            "sigma": self.sigma,
-            "candidates": self.candidates.tolist(),
-            "details": dict(self.details),
-        }
-
 
 # -- the convex problem -----------------------------------------------------------------------
 def _lmi_maps(G: np.ndarray, criterion: str):
@@ -164,7 +155,7 @@ def _lmi_maps(G: np.ndarray, criterion: str):
 
     "A"/"minimax": L_p = [[X_p, I], [I, J_p(w)]]; "D": L_p = [[J_p(w), Z_p], [Z_pᵀ,
     Diag(Z_p)]]. ``z`` holds six numbers per node, z[6p + k]: the entries of X_p in the
-    order of ``_IU`` or of the lower-triangular Z_p in the order of ``_IL``.
+    order of ``ENTRIES`` or of the lower-triangular Z_p in the order of ``_IL``.
     """
     import scipy.sparse as sp
 
@@ -176,13 +167,13 @@ def _lmi_maps(G: np.ndarray, criterion: str):
         return base + r * 6 + c
 
     rows_w, vals_w = [], []
-    for k, (i, j) in enumerate(_IU):  # J_p(w) entries, both triangles: dense in w
+    for k, (i, j) in enumerate(ENTRIES):  # J_p(w) entries, both triangles: dense in w
         for r, c in {(i, j), (j, i)}:
             rows_w.append(np.repeat(pos(J0 + r, J0 + c), N))
             vals_w.append(G[k].T.ravel())  # (P, N) row-major, matches np.repeat
     cols_w = np.tile(np.arange(N), P * len(rows_w))
     rows_z, cols_z = [], []
-    for k, (i, j) in enumerate(_IU if criterion != "D" else _IL):
+    for k, (i, j) in enumerate(ENTRIES if criterion != "D" else _IL):
         if criterion != "D":  # X_p, symmetric, top-left block
             cells = {(i, j), (j, i)}
         else:  # Z_p top-right, Z_pᵀ bottom-left, diag(Z_p) bottom-right
@@ -286,7 +277,7 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
         return None
     P = J6.shape[1]
     J = np.empty((P, 3, 3))
-    for k, (i, j) in enumerate(_IU):
+    for k, (i, j) in enumerate(ENTRIES):
         J[:, i, j] = J[:, j, i] = J6[k]
     Jinv = np.linalg.inv(J)
     if criterion == "D":
@@ -303,7 +294,7 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
             lam = lam / lam.sum()
             Y *= lam[:, None, None]
             f_lin = float(lam @ f_nodes)
-    Y6 = np.stack([Y[:, i, j] for i, j in _IU]) * ENTRY_WEIGHTS[:, None]  # (6, P)
+    Y6 = np.stack([Y[:, i, j] for i, j in ENTRIES]) * ENTRY_WEIGHTS[:, None]  # (6, P)
     c = np.einsum("knp,kp->n", G, Y6)  # −∂f/∂w_n ≥ 0
     top = np.sort(c)[::-1][:M].sum()
     bound = f_lin + float(c @ w) - top
@@ -314,14 +305,6 @@ def _certified_bound(G: np.ndarray, w: np.ndarray, M: int, criterion: str, lam=N
 
 
 # -- rounding ---------------------------------------------------------------------------------
-def _subset_values(G: np.ndarray, S: np.ndarray, criterion: str) -> np.ndarray:
-    """Normalized objective of subsets S (K, M) → (K,)."""
-    out = np.empty(S.shape[0])
-    for lo in range(0, S.shape[0], 64):
-        out[lo : lo + 64] = criterion_values(G[:, S[lo : lo + 64]].sum(axis=2), criterion)
-    return out
-
-
 def _lowered(x: float) -> float:
     """x minus a relative 1e-12 (x itself if not finite): the bar for a strict improvement."""
     return x - 1e-12 * abs(x) if np.isfinite(x) else x
@@ -381,7 +364,7 @@ def _round(G, w, M, criterion, rng, samples: int, starts: int):
     drawn = np.argpartition(-keys, M - 1, axis=1)[:, :M]
     top = np.argsort(-(p + 1e-9 * rng.random(N)), kind="stable")[:M]
     S = np.unique(np.sort(np.vstack([top[None], drawn]), axis=1), axis=0)
-    v = _subset_values(G, S, criterion)
+    v = subset_values(G, S, criterion)
     order = np.argsort(v, kind="stable")[:starts]
     best_S, best_v = S[order[0]], float(v[order[0]])
     for k in order:
@@ -392,6 +375,35 @@ def _round(G, w, M, criterion, rng, samples: int, starts: int):
 
 
 # -- public API -------------------------------------------------------------------------------
+def _certify(G, wv, lam, M, criterion, inp, cost_m2, obj, solver_status, details):
+    """(status, message, lower bound m², gap, relaxed cost m²) from the relaxed weights
+    (see "Certificate" in the module docstring); adds the D criterion's log-det figures and
+    the relaxation gap to ``details``."""
+    nan, inf = float("nan"), float("inf")
+    if wv is None:
+        return 4, f"solver_failed: {solver_status}", 0.0, inf, nan
+    cert = _certified_bound(G, wv, M, criterion, lam)
+    if cert is None:
+        return 3, "singular_relaxation", 0.0, inf, nan
+    lb_norm, f_norm = cert
+    relaxed = float(inp.scale(f_norm))
+    lb = float(inp.scale(lb_norm)) if criterion == "D" or lb_norm > 0 else 0.0
+    # how well Clarabel solved the relaxation: f(w*) against the bound certified at w*
+    details["relaxation_gap"] = relaxed / lb - 1 if lb > 0 else inf
+    if criterion == "D":
+        P = G.shape[2]
+        details["logdet_sum"] = float(-P * obj - 6 * P * np.log(inp.sigma_ref))
+        details["logdet_upper_bound"] = float(-P * lb_norm - 6 * P * np.log(inp.sigma_ref))
+    if lb > cost_m2 * (1 + _BOUND_RTOL):
+        log.warning("relax_select: bound %g above cost %g, not certified", lb, cost_m2)
+        return 2, "bound_above_value", 0.0, inf, relaxed
+    lower = min(lb, cost_m2)
+    gap = (cost_m2 - lower) / lower if lower > 0 else inf
+    if solver_status == "optimal":
+        return 0, "optimal", lower, gap, relaxed
+    return 1, "inaccurate", lower, gap, relaxed
+
+
 def relax_select(
     room: Room,
     M: int,
@@ -400,11 +412,12 @@ def relax_select(
     criterion: str = "A",
     sigma=0.04,
     nodes=None,
-    seed=None,
+    rng=None,
     spacing: float = DEFAULT_SPACING,
     samples: int = 64,
     starts: int = 8,
     solver_opts: dict | None = None,
+    seed=checks.UNSET,
 ) -> Selection:
     """Choose M of N candidate mounting points by convex relaxation + rounding.
 
@@ -418,7 +431,8 @@ def relax_select(
     sigma : range standard deviation (m), scalar, per candidate (N,) or per node and
         candidate (P, N) (e.g. :class:`analysis.MultipathRangeNoise`).
     nodes : (P, 3) evaluation nodes (m); default ``room.grid()`` (270 nodes).
-    seed : seed or ``numpy.random.Generator`` for the rounding.
+    rng : an int seed, a ``numpy.random.Generator`` or None (fresh entropy) for the
+        rounding. ``seed`` is its deprecated name.
     samples, starts : subsets drawn ∝ weights; how many of the best get local search.
     solver_opts : extra keyword arguments for Clarabel (through ``cvxpy.Problem.solve``).
 
@@ -436,7 +450,8 @@ def relax_select(
     starts = checks.count("starts", starts, low=1, high=10_000)
     if solver_opts is not None:
         checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
-    rng = checks.rng("seed", seed)
+    name = "rng" if seed is checks.UNSET else "seed"
+    rng = checks.rng(name, checks.rng_or_seed(rng, seed, owner="relax_select"))
     G = inp.table()
     N, M = G.shape[1], inp.M
     wv, lam, solver_status, solver_value, compile_time, solve_time, info = _solve(
@@ -446,48 +461,28 @@ def relax_select(
     t_round = time.perf_counter()
     S, obj = _round(G, wv, M, criterion, rng, int(samples), int(starts))
     rounding_time = time.perf_counter() - t_round
-    value = float(inp.scale(obj))
+    cost_m2 = float(inp.scale(obj))
 
-    details = dict(info)
+    details = {}
     if np.isfinite(solver_value):
         details["solver_value"] = float(inp.scale(solver_value))
-    lower_bound, gap, certified, relaxed_value = 0.0, float("inf"), False, float("nan")
-    if wv is None:
-        status = f"solver_failed: {solver_status}"
-    else:
-        cert = _certified_bound(G, wv, M, criterion, lam)
-        if cert is None:
-            status = "singular_relaxation"
-        else:
-            lb_norm, f_norm = cert
-            relaxed_value = float(inp.scale(f_norm))
-            lb = float(inp.scale(lb_norm)) if criterion == "D" or lb_norm > 0 else 0.0
-            # how well Clarabel solved the relaxation: f(w*) against the bound certified at w*
-            details["relaxation_gap"] = relaxed_value / lb - 1 if lb > 0 else float("inf")
-            if lb > value * (1 + _BOUND_RTOL):
-                status = "bound_above_value"
-                log.warning("relax_select: bound %g above value %g, not certified", lb, value)
-            else:
-                lower_bound, certified = min(lb, value), True
-                gap = (value - lower_bound) / lower_bound if lower_bound > 0 else float("inf")
-                status = "optimal" if solver_status == "optimal" else "inaccurate"
-            if criterion == "D":
-                P = G.shape[2]
-                details["logdet_sum"] = float(-P * obj - 6 * P * np.log(inp.sigma_ref))
-                details["logdet_upper_bound"] = float(-P * lb_norm - 6 * P * np.log(inp.sigma_ref))
-    weights = np.zeros(N) if wv is None else wv
+    status, message, lower, gap, relaxed = _certify(
+        G, wv, lam, M, criterion, inp, cost_m2, obj, solver_status, details
+    )
     return Selection(
         anchors=inp.candidates[S].copy(),
         indices=S,
-        weights=weights,
-        value=value,
-        lower_bound=lower_bound,
+        weights=np.zeros(N) if wv is None else wv,
+        cost_m2=cost_m2,
+        lower_bound_m2=lower,
         gap=float(gap),
+        success=status in (0, 1),
         status=status,
+        message=message,
+        nit=int(info.get("iterations") or 0),
         solve_time=solve_time,
         criterion=criterion,
-        relaxed_value=relaxed_value,
-        certified=certified,
+        relaxed_cost_m2=relaxed,
         solver_status=solver_status,
         compile_time=compile_time,
         rounding_time=rounding_time,

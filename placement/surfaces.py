@@ -289,6 +289,46 @@ def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = No
     return np.concatenate(out, axis=0)
 
 
+def _edge_segments(room: Room) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Where a naive installer puts anchors: the top edge of every mounting wall (in the
+    order of ``room.mounting``), or without mounting walls the edge of the first mounting
+    surface (ceiling or floor), as (start, end) segments."""
+    surfs = mounting_surfaces(room)
+    walls = [s for s in surfs if s.axis != 2]
+    if walls:  # wall rectangles have v = z: the top edge is v = upper
+        return [
+            (s.point([s.lower[0], s.upper[1]]), s.point([s.upper[0], s.upper[1]])) for s in walls
+        ]
+    s = surfs[0]
+    (u0, v0), (u1, v1) = s.lower, s.upper
+    loop = [s.point(c) for c in ((u0, v0), (u1, v0), (u1, v1), (u0, v1), (u0, v0))]
+    return list(zip(loop[:-1], loop[1:], strict=True))
+
+
+def naive_layout(room: Room, M: int) -> np.ndarray:
+    """(M, 3) a naive layout: M anchors spread evenly along the top edges of the mounting
+    walls (without mounting walls: around the edge of the ceiling or floor), the way
+    anchors are often installed without planning; anchors in a keep-out are moved to the
+    nearest allowed point (:func:`project`).
+
+    The edges are joined end to end and anchor k sits at arc length (k + ½)·ℓ/M along
+    them (ℓ their total length). In techtile (south, north walls and ceiling) M = 4 puts
+    two anchors along the top of each long wall, at a quarter and three quarters of it.
+    A comparison baseline for the report, beside the paper's corners layout.
+    """
+    room = as_room(room)
+    M = checks.count("M", M, low=1, high=MAX_LAYOUT_ANCHORS)
+    segments = _edge_segments(room)
+    start = np.array([a for a, _ in segments])
+    step = np.array([b - a for a, b in segments])
+    length = np.linalg.norm(step, axis=-1)
+    ends = np.cumsum(length)
+    t = (np.arange(M) + 0.5) * ends[-1] / M
+    k = np.minimum(np.searchsorted(ends, t), len(segments) - 1)
+    frac = (t - (ends[k] - length[k])) / np.where(length[k] > 0, length[k], 1.0)
+    return project(room, start[k] + frac[:, None] * step[k])
+
+
 def aim(room: Room, anchors) -> np.ndarray:
     """(..., M, 3) unit aim vectors of the anchors toward the room centroid (paper §V-A)."""
     return aim_vectors(anchors, as_room(room).centroid)

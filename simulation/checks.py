@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ __all__ = [
     "count",
     "describe",
     "distinct",
+    "entropy",
     "flag",
     "geometry",
     "input_dir",
@@ -42,6 +44,7 @@ __all__ = [
     "real",
     "reals",
     "rng",
+    "rng_or_seed",
     "seed",
 ]
 
@@ -203,6 +206,56 @@ def rng(name: str, value: Any) -> np.random.Generator:
         f"{name}: must be a numpy Generator, a seed (an integer >= 0) or None, "
         f"got {describe(value)}"
     )
+
+
+def entropy(name: str, value: Any) -> int:
+    """An integer seed (>= 0) standing for an ``rng`` argument: a seed is itself, so that
+    ``rng=s`` reproduces what ``seed=s`` did; a Generator (BitGenerator, SeedSequence)
+    gives one draw below 2**63; None gives fresh entropy (below 2**63). For functions that
+    derive several child streams from one seed (``SeedSequence(entropy).spawn(n)``)."""
+    if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
+        if value >= 0:
+            return int(value)
+    if value is None:
+        return int(np.random.SeedSequence().entropy % 2**63)
+    return int(rng(name, value).integers(2**63))
+
+
+class _Unset:
+    """The default of a deprecated keyword: "not given"."""
+
+    def __repr__(self) -> str:
+        return "<unset>"
+
+
+#: the default of the deprecated ``seed=`` keywords (see :func:`rng_or_seed`)
+UNSET: Any = _Unset()
+
+
+def rng_or_seed(rng_value: Any, seed_value: Any, *, owner: str, rng_default: Any = None) -> Any:
+    """The ``rng`` argument of ``owner``, honouring its deprecated alias ``seed``.
+
+    ``seed_value`` is :data:`UNSET` when not given. Given both (``rng`` other than its
+    default ``rng_default``) is a ``ValueError``; ``seed`` alone warns
+    (``DeprecationWarning``) and is used as ``rng``.
+    """
+    if seed_value is UNSET:
+        return rng_value
+    if not (rng_value is rng_default or _same(rng_value, rng_default)):
+        raise ValueError(f"seed: {owner} got both rng and its deprecated alias seed; use rng")
+    warnings.warn(
+        f"{owner}(seed=...) is deprecated; use rng=... (an int seed, a numpy Generator or None)",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    return seed_value
+
+
+def _same(a: Any, b: Any) -> bool:
+    try:
+        return bool(type(a) is type(b) and a == b)
+    except (TypeError, ValueError):
+        return False
 
 
 # -- collections ------------------------------------------------------------------------------

@@ -6,9 +6,11 @@ DSP (:mod:`simulation.receiver`) to a range; the node is then located by least s
 (:mod:`simulation.positioning`). The noise-free windows do not depend on the realization
 and are computed once per layout (:class:`RangingScene`).
 
-Randomness: realization r draws its noise from its own stream,
-``np.random.default_rng(SeedSequence(seed).spawn(R)[r])``, so results do not depend on
-how realizations are chunked.
+Randomness (the ``rng`` convention of the whole API: an int seed, a numpy ``Generator`` or
+None): :func:`evaluate_layout` turns ``rng`` into one integer seed s (the int itself, or one
+draw of the Generator, :func:`simulation.checks.entropy`) and realization r draws its noise
+from its own stream ``np.random.default_rng(SeedSequence(s).spawn(R)[r])``, so results do
+not depend on how realizations are chunked, and ``rng=s`` reproduces the former ``seed=s``.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from simulation import checks
+from simulation import checks, statistics
 from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
@@ -145,19 +147,20 @@ def simulate_ranges(
     return scene.ranges(rng, noise=noise)
 
 
-def _stats(e: np.ndarray) -> dict:
-    v = e[np.isfinite(e)]
-    if v.size == 0:
-        nan = float("nan")
-        return {"std": nan, "mean": nan, "p95": nan, "rms": nan, "median": nan, "max": nan}
-    return {
-        "std": float(np.std(v)),
-        "mean": float(np.mean(v)),
-        "p95": float(np.percentile(v, 95)),
-        "rms": float(np.sqrt(np.mean(v * v))),
-        "median": float(np.median(v)),
-        "max": float(np.max(v)),
-    }
+def _stat(key: str, doc: str) -> property:
+    """A read-only property giving ``self.stats[key]``."""
+    return property(lambda self: self.stats[key], doc=doc)
+
+
+def _computed(fn, doc: str, *fields: str) -> functools.cached_property:
+    """A cached property: ``fn`` of the named fields (a function of
+    :mod:`simulation.statistics`)."""
+
+    def get(self):
+        return fn(*(getattr(self, f) for f in fields))
+
+    get.__doc__ = doc
+    return functools.cached_property(get)
 
 
 @dataclass(frozen=True)
@@ -166,8 +169,11 @@ class Evaluation:
 
     anchors (M, 3), nodes (P, 3); estimates (R, P, 3); ranges (R, P, M) estimated ranges;
     range_errors (R, P, M) = ranges − true distances; errors (R, P) Euclidean position
-    errors; converged (R, P) solver flags; noise_sigma (M,) the AWGN σ per anchor.
-    Statistics (``std`` population σ, ``mean``, ``p95``, ``rms``) are over all R·P errors.
+    errors; converged (R, P) solver flags; noise_sigma (M,) the AWGN σ per anchor; seed the
+    integer seed of the noise streams (``evaluate_layout(..., rng=seed)`` reproduces it).
+    Statistics (``std`` population σ, ``mean``, ``p95``, ``rms``) are over all R·P errors;
+    per node, :attr:`dop` is the paper's DOP (standard deviation of the error / σ_r) and
+    :attr:`dop_rms` the RMS-based one (RMSE / σ_r); formulas in :mod:`simulation.statistics`.
     """
 
     anchors: np.ndarray
@@ -178,7 +184,7 @@ class Evaluation:
     errors: np.ndarray
     converged: np.ndarray
     noise_sigma: np.ndarray
-    seed: int | None
+    seed: int
     snr_db: float
     room: Room = field(repr=False)
 
@@ -195,52 +201,48 @@ class Evaluation:
 
     @functools.cached_property
     def stats(self) -> dict:
-        """std, mean, p95, rms, median, max over all R·P Euclidean errors."""
-        return _stats(self.errors)
+        """std, mean, p95, rms, median, max over all finite R·P Euclidean errors, with ``n``
+        and ``n_invalid`` (:func:`simulation.statistics.error_stats`)."""
+        return statistics.error_stats(self.errors)
 
-    @property
-    def std(self) -> float:
-        return self.stats["std"]
-
-    @property
-    def mean(self) -> float:
-        return self.stats["mean"]
-
-    @property
-    def p95(self) -> float:
-        return self.stats["p95"]
-
-    @property
-    def rms(self) -> float:
-        return self.stats["rms"]
+    std = _stat("std", "population standard deviation σ of all R·P errors (m), the paper's σ")
+    mean = _stat("mean", "mean of all R·P errors (m)")
+    p95 = _stat("p95", "95th percentile of all R·P errors (m)")
+    rms = _stat("rms", "RMS of all R·P errors (m)")
 
     @property
     def axis_errors(self) -> np.ndarray:
         """(R, P, 3) absolute per-axis errors |p̂ − p|."""
-        return np.abs(self.estimates - self.nodes)
+        return statistics.axis_errors(self.estimates, self.nodes)
 
-    @property
-    def rmse(self) -> np.ndarray:
-        """(P,) RMS over realizations of the Euclidean error (σ_pos of :attr:`dop`)."""
-        return np.sqrt(np.mean(self.errors**2, axis=0))
-
-    @property
-    def node_mean(self) -> np.ndarray:
-        """(P,) mean Euclidean error per node."""
-        return np.mean(self.errors, axis=0)
-
-    @property
-    def range_std(self) -> np.ndarray:
-        """(P,) σ_r: mean over anchors of the std over realizations of the range error."""
-        return np.mean(np.std(self.range_errors, axis=0), axis=-1)
-
-    @property
-    def dop(self) -> np.ndarray:
-        """(P,) RMS-based DOP = σ_pos / σ_r (paper §V-A uses the std); +inf where σ_r = 0."""
-        sr = self.range_std
-        out = np.full(sr.shape, np.inf)
-        np.divide(self.rmse, sr, out=out, where=sr > 0)
-        return out
+    rmse = _computed(
+        statistics.node_rmse,
+        "(P,) RMS over realizations of the Euclidean error (the numerator of dop_rms)",
+        "errors",
+    )
+    node_std = _computed(
+        statistics.node_std,
+        "(P,) standard deviation over realizations of the Euclidean error (σ^p of dop)",
+        "errors",
+    )
+    node_mean = _computed(statistics.node_mean, "(P,) mean Euclidean error per node", "errors")
+    range_std = _computed(
+        statistics.range_std,
+        "(P,) σ_r: mean over anchors of the std over realizations of the range error",
+        "range_errors",
+    )
+    dop = _computed(
+        statistics.dop,
+        "(P,) the paper's DOP (§V-A) = node_std / range_std; +inf where σ_r = 0",
+        "errors",
+        "range_errors",
+    )
+    dop_rms = _computed(
+        statistics.dop_rms,
+        "(P,) the RMS-based DOP = rmse / range_std (≥ dop); +inf where σ_r = 0",
+        "errors",
+        "range_errors",
+    )
 
     @property
     def n_unconverged(self) -> int:
@@ -259,7 +261,6 @@ class Evaluation:
             "noise_sigma": self.noise_sigma.tolist(),
             "stats": {
                 **self.stats,
-                "n": int(self.errors.size),
                 "n_unconverged": self.n_unconverged,
                 "anchor_geometry": self.geometry,
                 "axis_mean": np.mean(ax, axis=(0, 1)).tolist(),
@@ -270,7 +271,9 @@ class Evaluation:
             },
             "per_node": {
                 "rmse": self.rmse.tolist(),
+                "std": self.node_std.tolist(),
                 "dop": self.dop.tolist(),
+                "dop_rms": self.dop_rms.tolist(),
                 "mean": self.node_mean.tolist(),
                 "range_std": self.range_std.tolist(),
             },
@@ -281,11 +284,40 @@ class Evaluation:
         return d
 
 
+def _check_workers(workers) -> None:
+    if workers is not None and (
+        isinstance(workers, bool)
+        or not isinstance(workers, int | np.integer)
+        or workers not in range(-1, 1025)
+        or workers == 0
+    ):
+        raise ValueError(
+            "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
+            f"got {checks.describe(workers)}"
+        )
+
+
+def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, workers, noise):
+    """(R, P, M) ranges; realization r from ``SeedSequence(seed).spawn(R)[r]``, ``chunk``
+    realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise)."""
+    P, M = scene.shape
+    if chunk is None:
+        chunk = max(1, NOISE_BUDGET_BYTES // (P * M * scene.receiver.window * 8))
+    children = np.random.SeedSequence(seed).spawn(realizations)
+    ranges = np.empty((realizations, P, M))
+    threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
+    with threads:
+        for i in range(0, realizations, chunk):
+            rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
+            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
+    return ranges
+
+
 def evaluate_layout(
     room: Room,
     anchors,
     realizations: int = 1,
-    seed: int | None = 0,
+    rng: int | np.random.Generator | None = 0,
     nodes=None,
     *,
     noise: bool = True,
@@ -297,6 +329,7 @@ def evaluate_layout(
     chunk: int | None = None,
     precision: str = "float64",
     workers: int | None = None,
+    seed=checks.UNSET,
 ) -> Evaluation:
     """Simulate ``realizations`` noisy range sets for every node and locate the nodes.
 
@@ -310,28 +343,25 @@ def evaluate_layout(
     faster single-precision DSP (see :class:`~simulation.receiver.Dsp`). ``workers``
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
     ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
+
+    ``rng`` (an int seed, default 0; a numpy ``Generator``, drawn once; or None, fresh
+    entropy) gives the integer seed s of the noise streams (see the module docstring),
+    kept as ``Evaluation.seed``: ``rng=ev.seed`` reproduces ``ev``. ``seed`` is the
+    deprecated name of ``rng``.
     """
     room = as_room(room)
     anchors = room.check_anchors(checks.reals("anchors", anchors))
     checks.distinct("anchors", anchors)
     realizations = checks.count("realizations", realizations, low=1)
-    seed = checks.seed("seed", seed)
+    name = "rng" if seed is checks.UNSET else "seed"
+    rng = checks.rng_or_seed(rng, seed, owner="evaluate_layout", rng_default=0)
+    seed = checks.entropy(name, rng)
     noise = checks.flag("noise", noise)
     bounded = checks.flag("bounded", bounded)
     max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
-    if workers is not None and (
-        isinstance(workers, bool)
-        or not isinstance(workers, int | np.integer)
-        or workers not in range(-1, 1025)
-    ):
-        raise ValueError(
-            "workers: must be None, -1 (all cores) or an integer in [1, 1024], "
-            f"got {checks.describe(workers)}"
-        )
-    if workers == 0:
-        raise ValueError("workers: must be None, -1 (all cores) or an integer in [1, 1024], got 0")
+    _check_workers(workers)
     n_nodes = len(room.grid()) if nodes is None else len(_check_nodes(nodes, room))
     checks.check_size(
         "realizations",
@@ -348,22 +378,12 @@ def evaluate_layout(
         receiver=receiver,
         precision=precision,
     )
-    P, M = scene.shape
-    if chunk is None:
-        per = P * M * scene.receiver.window * 8
-        chunk = max(1, NOISE_BUDGET_BYTES // per)
-    children = np.random.SeedSequence(seed).spawn(realizations)
-    ranges = np.empty((realizations, P, M))
-    threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
-    with threads:
-        for i in range(0, realizations, chunk):
-            rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
-            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
+    ranges = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
     region = (np.zeros(3), np.asarray(room.size, dtype=float))
     fix = locate(
         anchors, ranges, region=region, bounded=bounded, max_iter=max_iter, full_output=True
     )
-    errors = np.linalg.norm(fix.x - scene.nodes, axis=-1)
+    errors = statistics.euclidean_errors(fix.x, scene.nodes)
     return Evaluation(
         anchors=anchors,
         nodes=scene.nodes,

@@ -22,12 +22,8 @@ of the window), so they are folded into one (Nc, N) matrix G applied to a batch 
 matrix product; step 3 is a product with |H|² in the frequency domain (one rfft and one
 irfft of size ≥ Nc + taps − 1, no wrap-around), in blocks that can run on several threads.
 
-The float64 chain is bound by that product and the two FFTs (~0.13 ms per window on one
-core of the reference machine). Two shortcuts were measured and not kept: the
-correlation by FFT (rfft/irfft of size ≥ Nc instead of the product: as costly), and a
-certified coarse argmax (lp on every 4th lag from the bins below nfft/8, exact lp on 64
-lags around its maximum, a spectral bound on the rest; same index, but the exact window
-and the bound cost what the smaller irfft saves).
+The float64 chain is bound by that product and the two FFTs; its timings and the
+shortcuts that were tried and not kept are in docs/implementation.md.
 """
 
 from __future__ import annotations
@@ -180,10 +176,10 @@ class Dsp:
     snapped full-correlation indices (...,) and ``ranges(windows, c)`` to metres.
 
     ``precision="float64"`` (default) gives the index of :func:`reference_chain`.
-    ``"float32"`` runs the correlation and low-pass in single precision, about 2× faster;
-    rounding then moves the low-pass argmax of a few windows in 10⁴ onto a neighbouring raw
-    peak (tested: ≥ 99.5 % identical indices) — meant for optimizer inner loops, not for
-    reported figures.
+    ``"float32"`` runs the correlation and low-pass in single precision, faster
+    (docs/implementation.md); rounding then moves the low-pass argmax of a few windows in
+    10⁴ onto a neighbouring raw peak (tested: ≥ 99.5 % identical indices) — meant for
+    optimizer inner loops, not for reported figures.
     """
 
     def __init__(self, chirp: Chirp, receiver: Receiver, precision: str = "float64"):

@@ -84,7 +84,8 @@ def test_pso_options_counts(field, v):
         (lambda: Room(max_order=True), "max_order"),
         (lambda: Room(max_order=2.5), "max_order"),
         (lambda: evaluate_layout(ROOM, A, realizations=True), "realizations"),
-        (lambda: evaluate_layout(ROOM, A, seed=1.7), "seed"),
+        (lambda: evaluate_layout(ROOM, A, rng=1.7), "rng"),
+        (lambda: evaluate_layout(ROOM, A, rng=-1), "rng"),
         (lambda: evaluate_layout(ROOM, A, chunk=0.5), "chunk"),
         (lambda: evaluate_layout(ROOM, A, workers=0), "workers"),
         (lambda: placement.random_layout(ROOM, True, 0), "M"),
@@ -242,7 +243,8 @@ def test_refine_never_reports_success_with_duplicated_anchors(monkeypatch):
 
     monkeypatch.setattr(refine, "from_uv", collapse)
     res = placement.refine_peb(ROOM, placement.random_layout(ROOM, 5, 1), return_info=True)
-    assert not res.success and not res.accepted and res.status.startswith("duplicate_anchors")
+    assert not res.success and not res.accepted and res.status == 4
+    assert res.message.startswith("duplicate_anchors")
 
 
 # -- physics -------------------------------------------------------------------------------

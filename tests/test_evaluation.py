@@ -54,29 +54,59 @@ def test_noise_rule_gives_the_snr_at_the_closest_grid_node():
 def test_same_seed_same_result_whatever_the_chunking():
     a = ROOM.corners_layout()
     nodes = ROOM.grid()[::6]
-    e1 = evaluate_layout(ROOM, a, realizations=3, seed=4, nodes=nodes, chunk=1)
-    e2 = evaluate_layout(ROOM, a, realizations=3, seed=4, nodes=nodes, chunk=2)
-    e3 = evaluate_layout(ROOM, a, realizations=3, seed=4, nodes=nodes)
+    e1 = evaluate_layout(ROOM, a, realizations=3, rng=4, nodes=nodes, chunk=1)
+    e2 = evaluate_layout(ROOM, a, realizations=3, rng=4, nodes=nodes, chunk=2)
+    e3 = evaluate_layout(ROOM, a, realizations=3, rng=4, nodes=nodes)
     for e in (e2, e3):
         assert np.array_equal(e.ranges, e1.ranges)
         assert np.array_equal(e.estimates, e1.estimates)
     # the first realizations do not depend on how many follow
-    e4 = evaluate_layout(ROOM, a, realizations=1, seed=4, nodes=nodes)
+    e4 = evaluate_layout(ROOM, a, realizations=1, rng=4, nodes=nodes)
     assert np.array_equal(e4.ranges[0], e1.ranges[0])
-    e5 = evaluate_layout(ROOM, a, realizations=1, seed=5, nodes=nodes)
+    e5 = evaluate_layout(ROOM, a, realizations=1, rng=5, nodes=nodes)
     assert not np.array_equal(e5.ranges[0], e1.ranges[0])
+
+
+def test_rng_int_reproduces_the_former_seed_streams():
+    """rng=s draws realization r from SeedSequence(s).spawn(R)[r], exactly as seed=s did."""
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()[::9]
+    ev = evaluate_layout(ROOM, a, realizations=2, rng=11, nodes=nodes)
+    scene = RangingScene(ROOM, a, nodes)
+    streams = [np.random.default_rng(s) for s in np.random.SeedSequence(11).spawn(2)]
+    assert np.array_equal(ev.ranges, scene.ranges_batch(streams))
+    assert ev.seed == 11
+    with pytest.warns(DeprecationWarning, match="rng"):
+        old = evaluate_layout(ROOM, a, realizations=2, seed=11, nodes=nodes)
+    assert np.array_equal(old.ranges, ev.ranges)
+    with pytest.raises(ValueError, match="seed"):
+        evaluate_layout(ROOM, a, rng=3, seed=11, nodes=nodes)
+    # a Generator is drawn once for the integer seed, kept in Evaluation.seed
+    g = evaluate_layout(ROOM, a, realizations=2, rng=np.random.default_rng(2), nodes=nodes)
+    assert g.seed == int(np.random.default_rng(2).integers(2**63))
+    again = evaluate_layout(ROOM, a, realizations=2, rng=g.seed, nodes=nodes)
+    assert np.array_equal(again.ranges, g.ranges)
+    fresh = evaluate_layout(ROOM, a, realizations=1, rng=None, nodes=nodes)
+    assert 0 <= fresh.seed < 2**63
 
 
 def test_evaluation_statistics_match_analysis():
     a = ROOM.corners_layout()
-    ev = evaluate_layout(ROOM, a, realizations=3, seed=1, nodes=ROOM.grid()[::4])
+    ev = evaluate_layout(ROOM, a, realizations=3, rng=1, nodes=ROOM.grid()[::4])
     P = len(ev.nodes)
     assert ev.errors.shape == (3, P) and ev.estimates.shape == (3, P, 3)
     assert ev.range_errors.shape == (3, P, 4) and ev.converged.shape == (3, P)
     st = analysis.error_stats(ev.errors)
-    assert ev.std == pytest.approx(st.std) and ev.mean == pytest.approx(st.mean)
-    assert ev.p95 == pytest.approx(st.p95) and ev.rms == pytest.approx(st.rms)
+    assert ev.std == pytest.approx(st["std"]) and ev.mean == pytest.approx(st["mean"])
+    assert ev.p95 == pytest.approx(st["p95"]) and ev.rms == pytest.approx(st["rms"])
+    # the paper's DOP (std of the error / σ_r) and the RMS-based one (RMSE / σ_r)
+    sr = np.mean(np.std(ev.range_errors, axis=0), axis=-1)
+    np.testing.assert_allclose(ev.range_std, sr)
+    np.testing.assert_allclose(ev.dop, np.std(ev.errors, axis=0) / sr)
+    np.testing.assert_allclose(ev.dop_rms, ev.rmse / sr)
     np.testing.assert_allclose(ev.dop, analysis.dop(ev.errors, ev.range_errors))
+    np.testing.assert_allclose(ev.dop_rms, analysis.dop_rms(ev.errors, ev.range_errors))
+    assert np.all(ev.dop <= ev.dop_rms)
     np.testing.assert_allclose(ev.axis_errors, analysis.axis_errors(ev.estimates, ev.nodes))
     np.testing.assert_allclose(ev.errors, analysis.euclidean_errors(ev.estimates, ev.nodes))
     np.testing.assert_allclose(ev.rmse, np.sqrt(np.mean(ev.errors**2, axis=0)))
@@ -95,11 +125,13 @@ def test_evaluation_statistics_match_analysis():
     } <= set(back)
     assert back["stats"]["std"] == pytest.approx(ev.std)
     assert len(back["per_node"]["dop"]) == P and np.array(back["errors"]).shape == (3, P)
+    assert back["per_node"]["dop_rms"] == pytest.approx(ev.dop_rms.tolist())
+    assert back["stats"]["n"] == 3 * P and back["stats"]["n_invalid"] == 0
 
 
 def test_corners_layout_sanity_figure():
     """Paper: σ = 1.362 m for the corners layout with noise (R = 500)."""
-    ev = evaluate_layout(ROOM, ROOM.corners_layout(), realizations=3, seed=0)
+    ev = evaluate_layout(ROOM, ROOM.corners_layout(), realizations=3, rng=0)
     assert ev.errors.shape == (3, 270)
     assert 1.0 < ev.std < 1.9
     assert ev.n_unconverged <= 0.01 * ev.errors.size
@@ -152,7 +184,7 @@ def test_calibrated_sigma_is_robust_to_outliers():
 
 
 def test_calibrated_sigma_from_simulation_is_centimetres():
-    ev = evaluate_layout(ROOM, ROOM.corners_layout(), realizations=2, seed=3)
+    ev = evaluate_layout(ROOM, ROOM.corners_layout(), realizations=2, rng=3)
     s = calibrated_sigma(ev.range_errors)
     raw = np.std(ev.range_errors.reshape(-1, 4), axis=0)
     assert np.all((s > 0.005) & (s < 0.3))  # paper: 0.03–0.045 m for its layouts
@@ -168,7 +200,7 @@ def test_other_room_chirp_receiver_and_snr():
     a = room.corners_layout()
     nodes = room.grid((4, 3, 3))
     ev = evaluate_layout(
-        room, a, realizations=2, seed=0, nodes=nodes, chirp=chirp, receiver=rx, snr_db=20.0
+        room, a, realizations=2, rng=0, nodes=nodes, chirp=chirp, receiver=rx, snr_db=20.0
     )
     assert ev.errors.shape == (2, 36) and np.all(np.isfinite(ev.errors))
     assert ev.range_errors.shape == (2, 36, 4)

@@ -8,7 +8,7 @@ import pytest
 
 import analysis
 import placement
-from placement.exhaustive import criterion_values, fim_table
+from placement.selection import criterion_values, fim_table
 from simulation import Room
 
 
@@ -43,12 +43,14 @@ def test_matches_brute_force(criterion):
         room, 4, candidates=cand, criterion=criterion, sigma=0.05, top_k=5
     )
     order = np.argsort(values, kind="stable")
-    assert res.n_subsets == math.comb(13, 4) == len(values)
-    assert res.value == pytest.approx(values[order[0]], rel=1e-9)
-    np.testing.assert_allclose(res.top_values, values[order[:5]], rtol=1e-9)
-    assert np.all(np.diff(res.top_values) >= 0)
+    assert res.nfev == math.comb(13, 4) == len(values)
+    assert res.success and res.status == 0 and res.fun == res.cost_m2
+    assert res.to_dict()["top_costs_m2"] == res.top_costs_m2.tolist()
+    assert res.cost_m2 == pytest.approx(values[order[0]], rel=1e-9)
+    np.testing.assert_allclose(res.top_costs_m2, values[order[:5]], rtol=1e-9)
+    assert np.all(np.diff(res.top_costs_m2) >= 0)
     # the reported subsets have the reported values
-    for idx, v in zip(res.top_indices, res.top_values, strict=True):
+    for idx, v in zip(res.top_indices, res.top_costs_m2, strict=True):
         k = np.flatnonzero(np.all(subsets == np.sort(idx), axis=1))[0]
         assert values[k] == pytest.approx(v, rel=1e-9)
     np.testing.assert_allclose(res.anchors, cand[res.indices])
@@ -60,9 +62,9 @@ def test_M5_and_per_candidate_sigma():
     sigma = np.linspace(0.03, 0.06, len(cand))
     subsets, values = _brute_force(room, cand, 5, "A", sigma)
     res = placement.exhaustive_search(room, 5, candidates=cand, sigma=sigma)
-    assert res.value == pytest.approx(values.min(), rel=1e-9)
+    assert res.cost_m2 == pytest.approx(values.min(), rel=1e-9)
     got = analysis.crlb_trace(res.anchors, room.grid(), sigma[res.indices]).mean()
-    assert res.value == pytest.approx(got, rel=1e-12)
+    assert res.cost_m2 == pytest.approx(got, rel=1e-12)
 
 
 def test_value_scales_with_sigma_squared():
@@ -71,7 +73,7 @@ def test_value_scales_with_sigma_squared():
     for criterion in ("A", "D", "minimax"):
         a = placement.exhaustive_search(room, 4, candidates=cand, criterion=criterion, sigma=0.02)
         b = placement.exhaustive_search(room, 4, candidates=cand, criterion=criterion, sigma=0.06)
-        assert b.value == pytest.approx(9 * a.value, rel=1e-9)
+        assert b.cost_m2 == pytest.approx(9 * a.cost_m2, rel=1e-9)
         np.testing.assert_array_equal(a.indices, b.indices)
 
 
@@ -82,7 +84,8 @@ def test_singular_subsets_are_inf():
     cand = cand[np.isclose(cand[:, 2], 2.37)][:8]
     nodes = np.array([[4.0, 2.0, 2.37], [4.0, 2.0, 1.0]])
     res = placement.exhaustive_search(room, 4, candidates=cand, nodes=nodes, top_k=3)
-    assert np.isinf(res.value) and np.all(np.isinf(res.top_values))
+    assert np.isinf(res.cost_m2) and np.all(np.isinf(res.top_costs_m2))
+    assert res.status == 1 and not res.success and res.message.startswith("singular")
     J = fim_table(cand, nodes)[:, :4].sum(axis=1)
     assert np.isinf(criterion_values(J, "D"))
 

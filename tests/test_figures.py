@@ -323,3 +323,26 @@ def test_dop_difference_with_infinite_dop_draws_grey_without_warnings():
         if c.get_gid() == "dop"
     )
     assert masked == 10
+
+
+def test_plan_view_numbers_the_anchors_in_plan_and_elevation(tmp_path):
+    fig = F.plan_view(ROOM, OTHER, figsize=(8, 3), dpi=40)
+    assert render(fig, tmp_path) == (320, 120)
+    plan, elevation = data_axes(fig)
+    (p,) = by_gid(plan, "anchors")
+    (e,) = by_gid(elevation, "anchors")
+    np.testing.assert_allclose(p.get_offsets(), OTHER[:, :2])
+    np.testing.assert_allclose(e.get_offsets(), OTHER[:, [0, 2]])
+    assert [t.get_text() for t in plan.texts] == ["1", "2", "3", "4"]
+    # techtile: the ceiling is shaded in the plan, the south and north walls are lines
+    assert len([a for a in plan.patches if a.get_gid() == "mounting"]) == 1
+    assert len([a for a in plan.lines if a.get_gid() == "mounting"]) == 2
+
+
+def test_dop_difference_says_which_dop():
+    a, b = np.full(270, 2.0), np.full(270, 1.5)
+    assert "the paper's DOP = σ/σ_r" in F.dop_difference(ROOM, NODES, a, b, dpi=20).get_suptitle()
+    rms = F.dop_difference(ROOM, NODES, a, b, definition="rms", dpi=20)
+    assert "DOP_RMS(initial)" in rms.get_suptitle() and "RMSE/σ_r" in rms.get_suptitle()
+    with pytest.raises(ValueError, match="definition"):
+        F.dop_difference(ROOM, NODES, a, b, definition="gdop")

@@ -4,6 +4,7 @@ import pytest
 import analysis
 from analysis.noise import PhysicalRangeNoise, direct_amplitude
 from simulation import Room
+from simulation.statistics import STATISTICS
 
 
 def test_physical_sigma_matches_explicit_sum_and_snr_reference():
@@ -49,24 +50,57 @@ def test_physical_sigma_grows_with_distance_and_off_axis():
 def test_error_stats_and_ecdf():
     e = np.array([0.1, 0.2, 0.3, 0.4, np.inf])
     st = analysis.error_stats(e)
-    assert st.n == 4 and st.n_invalid == 1
-    assert st.mean == pytest.approx(0.25)
-    assert st.std == pytest.approx(np.std([0.1, 0.2, 0.3, 0.4]))
-    assert st.rms == pytest.approx(np.sqrt(np.mean(np.array([0.1, 0.2, 0.3, 0.4]) ** 2)))
-    assert st.to_dict()["p95"] == pytest.approx(np.percentile([0.1, 0.2, 0.3, 0.4], 95))
+    assert st["n"] == 4 and st["n_invalid"] == 1  # the failed fix is counted, not hidden
+    assert st["mean"] == pytest.approx(0.25)
+    assert st["std"] == pytest.approx(np.std([0.1, 0.2, 0.3, 0.4]))
+    assert st["rms"] == pytest.approx(np.sqrt(np.mean(np.array([0.1, 0.2, 0.3, 0.4]) ** 2)))
+    assert st["p95"] == pytest.approx(np.percentile([0.1, 0.2, 0.3, 0.4], 95))
+    assert st["median"] == pytest.approx(0.25) and st["max"] == pytest.approx(0.4)
+    empty = analysis.error_stats([np.nan])
+    assert np.isnan(empty["std"]) and empty["n"] == 0 and empty["n_invalid"] == 1
     x, F = analysis.ecdf([0.3, 0.1, 0.2])
     np.testing.assert_allclose(x, [0.1, 0.2, 0.3])
     np.testing.assert_allclose(F, [1 / 3, 2 / 3, 1])
+    x, F = analysis.ecdf([0.3, np.inf, 0.1, 0.2])  # a failure keeps the CDF below 1
+    np.testing.assert_allclose(F, [1 / 4, 2 / 4, 3 / 4])
 
 
-def test_dop_and_axis_errors():
+def test_cost_statistics_are_inf_for_a_failed_fix():
+    e = np.array([[0.1, 0.2], [0.3, 0.4]])
+    st = analysis.error_stats(e)
+    assert STATISTICS["variance"](e) == pytest.approx(st["std"] ** 2)
+    for name in ("mean", "p95", "rms"):
+        assert STATISTICS[name](e) == pytest.approx(st[name])
+    bad = e.copy()
+    bad[0, 0] = np.nan
+    assert all(STATISTICS[k](bad) == np.inf for k in STATISTICS)
+
+
+def test_per_node_statistics_use_the_finite_errors():
+    e = np.array([[1.0, 2.0, np.inf], [3.0, 2.0, np.nan], [5.0, np.inf, np.nan]])
+    np.testing.assert_allclose(analysis.node_mean(e), [3.0, 2.0, np.inf])
+    np.testing.assert_allclose(analysis.node_std(e), [np.std([1, 3, 5]), 0.0, np.inf])
+    np.testing.assert_allclose(analysis.node_rmse(e), [np.sqrt(35 / 3), 2.0, np.inf])
+    with pytest.raises(ValueError, match="errors"):
+        analysis.node_std(np.ones(3))
+
+
+def test_dop_is_the_papers_and_dop_rms_adds_the_bias():
     rng = np.random.default_rng(0)
     R, P, M = 2000, 3, 4
     range_err = rng.normal(0, 0.05, size=(R, P, M))
     pos = rng.normal(0, 0.1, size=(R, P, 3))
     e = np.linalg.norm(pos, axis=-1)
-    d = analysis.dop(e, range_err)
-    np.testing.assert_allclose(d, np.sqrt(3) * 0.1 / 0.05, rtol=0.05)
+    sr = np.mean(np.std(range_err, axis=0), axis=-1)
+    np.testing.assert_allclose(analysis.range_std(range_err), sr)
+    np.testing.assert_allclose(analysis.dop_rms(e, range_err), np.sqrt(3) * 0.1 / 0.05, rtol=0.05)
+    np.testing.assert_allclose(analysis.dop(e, range_err), np.std(e, axis=0) / sr)
+    # a steady bias of 1 m leaves the paper's DOP unchanged and raises the RMS-based one
+    np.testing.assert_allclose(analysis.dop(e + 1.0, range_err), analysis.dop(e, range_err))
+    assert np.all(analysis.dop_rms(e + 1.0, range_err) > 5 * analysis.dop_rms(e, range_err))
+    # one realization: σ_r = 0, both +inf
+    assert np.all(np.isinf(analysis.dop(e[:1], range_err[:1])))
+    assert np.all(np.isinf(analysis.dop_rms(e[:1], range_err[:1])))
     truth = np.zeros((P, 3))
     np.testing.assert_allclose(analysis.axis_errors(pos, truth), np.abs(pos))
     np.testing.assert_allclose(analysis.euclidean_errors(pos, truth), e)

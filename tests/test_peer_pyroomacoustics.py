@@ -2,11 +2,11 @@
 
 import numpy as np
 import pyroomacoustics as pra
+from peer import pra_windows
 
 from placement import random_layout
 from simulation import Room
 from simulation.multipath import ImageSet, compute_paths
-from simulation.peer import pra_windows
 from simulation.received import received_windows
 from simulation.receiver import dsp_for
 

@@ -34,10 +34,14 @@ def test_lowers_mean_peb_of_random_layout_and_keeps_surfaces():
         before = analysis.peb(a0, nodes, 0.04).mean()
         after = analysis.peb(res.anchors, nodes, 0.04).mean()
         assert after <= 0.9 * before  # substantial: ≥ 10 % on these starts
-        assert res.mean_peb == pytest.approx(after) and res.initial_mean_peb == pytest.approx(
+        assert res.mean_peb_m == pytest.approx(after) and res.initial_mean_peb_m == pytest.approx(
             before
         )
-        assert res.value == pytest.approx(after)  # objective "mean" = mean of √tr J⁻¹
+        assert res.objective_m == pytest.approx(after)  # objective "mean" = mean of √tr J⁻¹
+        assert res.fun == res.objective_m and res.status == 0 and res.nit > 0
+        assert res.nfev >= res.nit and res.message == "Solve_Succeeded"
+        np.testing.assert_array_equal(res.x, res.anchors.ravel())
+        assert res.to_dict()["mean_peb_m"] == res.mean_peb_m
         assert _on_own_surfaces(ROOM, a0, res.anchors)
         assert placement.on_surfaces(ROOM, res.anchors).all()
 
@@ -74,7 +78,7 @@ def test_result_is_stationary(hessian):
     )
     free = (x > lo + 1e-3) & (x < hi - 1e-3)
     assert free.sum() >= 2
-    scale = np.abs(grad).max() + res.mean_peb  # m per m
+    scale = np.abs(grad).max() + res.mean_peb_m  # m per m
     assert np.all(np.abs(grad[free]) < 1e-3 * scale)
     # at an active bound the gradient points outward (moving inward would not help)
     at_lo, at_hi = x <= lo + 1e-6, x >= hi - 1e-6
@@ -86,10 +90,10 @@ def test_smoothmax_lowers_worst_node_more_than_mean():
     mean = placement.refine_peb(ROOM, a0, objective="mean", return_info=True)
     smooth = placement.refine_peb(ROOM, a0, objective="smoothmax", return_info=True)
     assert smooth.success and smooth.accepted
-    assert smooth.max_peb < mean.max_peb
-    assert smooth.max_peb < smooth.initial_max_peb
+    assert smooth.max_peb_m < mean.max_peb_m
+    assert smooth.max_peb_m < smooth.initial_max_peb_m
     # log-mean-exp lies between the mean and the max PEB
-    assert smooth.mean_peb <= smooth.value <= smooth.max_peb
+    assert smooth.mean_peb_m <= smooth.objective_m <= smooth.max_peb_m
     assert _on_own_surfaces(ROOM, a0, smooth.anchors)
 
 
@@ -97,11 +101,11 @@ def test_multistart_and_per_anchor_sigma():
     a0 = placement.random_layout(ROOM, 4, 3)
     sig = np.array([0.03, 0.04, 0.05, 0.06])
     one = placement.refine_peb(ROOM, a0, sigma=sig, return_info=True)
-    many = placement.refine_peb(ROOM, a0, sigma=sig, multistart=3, seed=0, return_info=True)
+    many = placement.refine_peb(ROOM, a0, sigma=sig, multistart=3, rng=0, return_info=True)
     assert many.starts == 4 and one.starts == 1
-    assert many.value <= one.value * (1 + 1e-9)
+    assert many.objective_m <= one.objective_m * (1 + 1e-9)
     got = analysis.peb(many.anchors, ROOM.grid(), sig).mean()
-    assert many.value == pytest.approx(got)
+    assert many.objective_m == pytest.approx(got)
 
 
 def test_other_room_and_nodes():
@@ -109,7 +113,7 @@ def test_other_room_and_nodes():
     nodes = room.grid((5, 4, 3))
     a0 = placement.random_layout(room, 5, 0)
     res = placement.refine_peb(room, a0, nodes=nodes, return_info=True)
-    assert res.accepted and res.mean_peb < res.initial_mean_peb
+    assert res.accepted and res.mean_peb_m < res.initial_mean_peb_m
     assert _on_own_surfaces(room, a0, res.anchors)
 
 
@@ -118,7 +122,7 @@ def test_singular_start_returns_input_unchanged():
     a0[:, 2] = 2.37  # all four in the ceiling plane (wall anchors on its edges) ...
     nodes = np.array([[4.0, 2.0, 2.37], [4.0, 2.0, 1.0]])  # ... and a node in that plane
     res = placement.refine_peb(ROOM, a0, nodes=nodes, return_info=True)
-    assert res.status == "singular_start" and not res.accepted
+    assert res.status == 3 and res.message == "singular_start" and not res.accepted
     np.testing.assert_array_equal(res.anchors, a0)
 
 
@@ -133,7 +137,8 @@ def test_solver_error_returns_input_unchanged(monkeypatch):
     monkeypatch.setattr(refine, "_build_solver", broken)
     a0 = placement.random_layout(ROOM, 6, 0)
     res = placement.refine_peb(ROOM, a0, return_info=True)
-    assert res.status.startswith("error") and not res.accepted and not res.success
+    assert res.status == 5 and res.message.startswith("error")
+    assert not res.accepted and not res.success
     np.testing.assert_array_equal(res.anchors, a0)
 
 

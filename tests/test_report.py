@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import analysis
+import placement
 from analysis import report as rp
 from placement.cli import main
 from simulation import Room
@@ -71,23 +72,26 @@ def check_html(text: str) -> Checker:
     return c
 
 
-def fake_evaluate(room, anchors, realizations=1, seed=0, nodes=None, **kw):
+def fake_evaluate(room, anchors, realizations=1, rng=0, nodes=None, **kw):
     """A fast stand-in with the shapes of simulation.Evaluation (synthetic errors)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(rng)
     nodes = room.grid() if nodes is None else nodes
     R, P, M = realizations, len(nodes), len(anchors)
     est = nodes + rng.normal(0, 0.3, (R, P, 3))
     errors = np.linalg.norm(est - nodes, axis=-1)
     range_errors = rng.normal(0, 0.04, (R, P, M))
-    rmse = np.sqrt(np.mean(errors**2, axis=0))
-    sr = np.mean(np.std(range_errors, axis=0), axis=-1)
-    dop = np.divide(rmse, sr, out=np.full(P, np.inf), where=sr > 0)
     return SimpleNamespace(
-        errors=errors, estimates=est, range_errors=range_errors, rmse=rmse, dop=dop
+        anchors=np.asarray(anchors, float),
+        errors=errors,
+        estimates=est,
+        range_errors=range_errors,
+        rmse=analysis.node_rmse(errors),
+        dop=analysis.dop(errors, range_errors),
+        dop_rms=analysis.dop_rms(errors, range_errors),
     )
 
 
-def write_result(d, validation=True, history=True):
+def write_result(d, validation=True, history=True, extra=None):
     rng = np.random.default_rng(0)
     errors = rng.gamma(2.0, 0.4, (4, 270))
     T = 6
@@ -118,12 +122,14 @@ def write_result(d, validation=True, history=True):
             "per_node": {
                 "rmse": np.sqrt(np.mean(errors**2, axis=0)).tolist(),
                 "dop": (2.0 + rng.random(270)).tolist(),
+                "dop_rms": (3.0 + rng.random(270)).tolist(),
             },
             "errors": errors.tolist(),
+            **(extra or {}),
         }
         if validation
         else {},
-        "timings": {"pso": 12.5, "total": 14.0},
+        "timings": {"seeding": 1.5, "pso": 12.5, "validation": 0.5, "total": 14.0},
         "settings": {"M": 4, "particles": 8, "sigma": 0.04, "options": {"tol": 1e-3}},
     }
     (d / "result.json").write_text(json.dumps(result))
@@ -134,17 +140,18 @@ def write_result(d, validation=True, history=True):
 def test_report_from_result_json_with_simulator(tmp_path, monkeypatch):
     monkeypatch.setattr(rp, "_evaluator", lambda: fake_evaluate)
     result, errors = write_result(tmp_path)
-    path, rep = rp.write_report(tmp_path, realizations=3, dpi=40)
+    naive = placement.naive_layout(ROOM, 4)
+    path, rep = rp.write_report(tmp_path, realizations=3, dpi=40, comparisons={"naive": naive})
     assert path == tmp_path / "report.html"
     text = path.read_text()
     c = check_html(text)
-    assert len(c.imgs) == len(rep.figures) == 8
+    assert len(c.imgs) == len(rep.figures) == 9
     titles = " | ".join(rep.figures)
-    for want in ("PEB map", "PEB at the evaluation nodes", "RMSE", "Error CDFs", "Bound vs",
-                 "DOP difference", "Layouts", "PSO evolution"):  # fmt: skip
+    for want in ("Plan view", "PEB map", "PEB at the evaluation nodes", "RMSE", "Error CDFs",
+                 "Bound vs", "DOP difference", "Layouts", "PSO evolution"):  # fmt: skip
         assert want in titles
     names = [e.name for e in rep.layouts]
-    assert names == ["optimized", "seed relax-A", "seed relax-D", "corners"]
+    assert names == ["optimized", "naive", "corners", "seed relax-A", "seed relax-D"]
     body = "".join(c.text)
     # σ / mean / P95 of the stored validation, mean PEB computed here, coordinates
     v = result["validation"]
@@ -154,12 +161,46 @@ def test_report_from_result_json_with_simulator(tmp_path, monkeypatch):
     assert f"{mean_peb:.3f}" in body
     for a in OPT:
         assert f"{a[0]:.3f}" in body and f"{a[2]:.3f}" in body
+    # both DOPs, labelled: the stored paper DOP and the RMS-based one
+    assert "DOP (paper" in body and "DOPRMS" in body
+    assert f"{np.mean(v['per_node']['dop']):.2f}" in body
+    assert f"{np.mean(v['per_node']['dop_rms']):.2f}" in body
     # gap table: median RMSE/PEB of the optimized layout from the stored per-node RMSE
     rmse = np.asarray(v["per_node"]["rmse"])
     ratio = np.median(rmse / analysis.peb(OPT, NODES, 0.04))
     assert f"{ratio:.2f}" in body
     assert "numpy" in body and np.__version__ in body
-    assert "simulated for this report (R = 3)" in body  # the corners reference
+    assert "simulated for this report (R = 3)" in body  # the naive and corners references
+    assert f"{naive[0, 0]:.3f}" in body
+    # reading order: headline, layout (coordinates and plan view), comparison, ..., settings
+    heads = ('class="cards"', "<h2>Layout</h2>", "Plan view", "<h2>Comparison")
+    heads += ("<h2>Figures</h2>", "<h2>Settings</h2>", "<h2>Software</h2>")
+    order = [text.index(h) for h in heads]
+    assert order == sorted(order)
+    # timings: one row per phase
+    assert "Time per phase" in body and "seeding" in body and "14.0" in body
+    assert "Held-out" not in body and "Mounting tolerance" not in body
+
+
+def test_report_shows_the_plans_validation_sections(tmp_path, monkeypatch):
+    monkeypatch.setattr(rp, "_evaluator", lambda: None)
+    extra = {
+        "held_out": {
+            "grid": {"std": 0.611, "mean": 0.722, "p95": 1.833, "nodes": 150},
+            "random": {"std": 0.644, "mean": 0.755, "p95": 1.866, "nodes": 200},
+        },
+        "mounting": {"tolerance_m": 0.05, "draws": 20, "std": 0.677, "mean": 0.788, "p95": 1.899},
+    }
+    write_result(tmp_path, history=False, extra=extra)
+    rep = rp.build_report(tmp_path, dpi=30)
+    body = "".join(check_html(rep.html).text)
+    assert "Held-out nodes" in body and "Mounting tolerance" in body
+    for x in ("0.611", "0.722", "1.833", "150", "0.644", "200", "0.050", "20", "0.677", "1.899"):
+        assert x in body
+    # malformed optional sections do not break the report
+    extra = {"held_out": {"grid": "n/a"}, "mounting": 3}
+    write_result(tmp_path, history=False, extra=extra)
+    check_html(rp.build_report(tmp_path, dpi=30).html)
 
 
 def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch):
@@ -175,7 +216,7 @@ def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch)
 
 def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
     monkeypatch.setattr(rp, "_evaluator", lambda: None)
-    ev = fake_evaluate(ROOM, OPT, realizations=3, seed=1)
+    ev = fake_evaluate(ROOM, OPT, realizations=3, rng=1)
     data = {
         "room": ROOM.to_dict(),
         "anchors": OPT.tolist(),
@@ -191,6 +232,7 @@ def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
     c = check_html(rep.html)
     body = "".join(c.text)
     assert [e.name for e in rep.layouts] == ["evaluated", "corners"]
+    assert "No naive comparison layout was given" in body
     assert "0.123" in body and "0.456" in body and "1.789" in body
     assert "σr = 0.03 m" in body.replace("\n", "")
     assert any("Bound vs" in t for t in rep.figures)
@@ -198,7 +240,7 @@ def test_report_from_evaluation_json_only(tmp_path, monkeypatch):
 
 def test_report_merges_the_same_layout_from_both_files(tmp_path):
     write_result(tmp_path)
-    ev = fake_evaluate(ROOM, OPT, realizations=9, seed=2)
+    ev = fake_evaluate(ROOM, OPT, realizations=9, rng=2)
     (tmp_path / "evaluation.json").write_text(
         json.dumps(
             {
@@ -213,7 +255,7 @@ def test_report_merges_the_same_layout_from_both_files(tmp_path):
     )
     layouts = rp.collect_layouts(rp.load_results(tmp_path), ROOM, NODES)
     opt = layouts[0]
-    assert [e.role for e in layouts] == ["optimized", "seed", "seed", "reference"]
+    assert [e.role for e in layouts] == ["optimized", "reference", "seed", "seed"]
     assert opt.sim.realizations == 9 and opt.sim.source == "evaluation.json"
 
 
@@ -234,17 +276,20 @@ def test_cli_report_with_the_real_simulator(tmp_path, capsys):
     assert main([*argv, "--figures", str(tmp_path / "figs")]) == 0
     assert f"wrote {out}" in capsys.readouterr().out
     c = check_html(out.read_text())
-    assert len(c.imgs) == 8
+    assert len(c.imgs) == 9
     assert out.stat().st_size < 1_500_000
     pngs = sorted((tmp_path / "figs").glob("*.png"))
-    assert len(pngs) == 8 and pngs[0].name == "01-peb-map-of-the-optimized-layout.png"
+    assert len(pngs) == 9 and pngs[0].name == "01-plan-view-of-the-optimized-layout.png"
+    # the CLI compares with the naive layout of the same M, simulated here
+    body = "".join(c.text)
+    assert "σ of the naive layout" in body and "σ of the corners layout" in body
     # the files are the embedded images
     assert base64.b64encode(pngs[0].read_bytes()).decode() == c.imgs[0]["src"].split(",")[1]
 
 
 def test_report_with_one_realization_skips_the_dop_map(tmp_path, monkeypatch):
-    def one(room, anchors, realizations=1, seed=0, nodes=None, **kw):
-        ev = fake_evaluate(room, anchors, realizations, seed, nodes)
+    def one(room, anchors, realizations=1, rng=0, nodes=None, **kw):
+        ev = fake_evaluate(room, anchors, realizations, rng, nodes)
         assert np.all(np.isinf(ev.dop))  # σ_r = 0 with one realization
         return ev
 

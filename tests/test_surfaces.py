@@ -70,3 +70,29 @@ def test_random_layout_area_counts():
     np.testing.assert_allclose(
         aims, (room.centroid - a) / np.linalg.norm(room.centroid - a, axis=1)[:, None]
     )
+
+
+def test_naive_layout_spreads_anchors_along_the_top_of_the_mounting_walls():
+    room = Room.techtile()  # south, north walls and ceiling: the two long walls' top edges
+    a = placement.naive_layout(room, 4)
+    np.testing.assert_allclose(
+        a, [[2.015, 0.03, 2.37], [5.985, 0.03, 2.37], [2.015, 3.97, 2.37], [5.985, 3.97, 2.37]]
+    )
+    for M in (5, 8, 13):
+        a = placement.naive_layout(room, M)
+        assert a.shape == (M, 3) and placement.allowed(room, a, tol=1e-6).all()
+        assert np.allclose(a[:, 2], 2.37)  # all along the top edges
+        assert len(np.unique(a.round(6), axis=0)) == M
+    # no mounting wall: around the edge of the ceiling
+    ceiling = Room(mounting=("ceiling",))
+    b = placement.naive_layout(ceiling, 4)
+    np.testing.assert_allclose(b, [[3.0, 0.03, 2.37], [7.97, 1.0, 2.37], [5.0, 3.97, 2.37],
+                                   [0.03, 3.0, 2.37]])  # fmt: skip
+    # keep-outs: anchors are moved to the nearest allowed point
+    window = Room(keepouts=[((1.0, 0.0, 2.0), (3.0, 0.1, 2.4))])
+    c = placement.naive_layout(window, 4)
+    assert placement.allowed(window, c, tol=1e-6).all()
+    moved = np.linalg.norm(c - placement.naive_layout(room, 4), axis=1)
+    assert moved[0] == pytest.approx(0.07, abs=1e-5) and np.all(moved[1:] == 0)  # to the ceiling
+    with pytest.raises(ValueError, match="M"):
+        placement.naive_layout(room, 0)

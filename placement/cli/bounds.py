@@ -39,8 +39,8 @@ def run(args) -> int:
         print(f"note: the anchors are {geometry}")
     print("PEB = sqrt(tr J^-1) in metres over the grid:")
     print(
-        f"  mean {stats.mean:.4f}  median {stats.median:.4f}  P95 {stats.p95:.4f}  "
-        f"max {stats.max:.4f}  singular nodes {stats.n_invalid}"
+        f"  mean {stats['mean']:.4f}  median {stats['median']:.4f}  P95 {stats['p95']:.4f}  "
+        f"max {stats['max']:.4f}  singular nodes {stats['n_invalid']}"
     )
     if args.out:
         write_json(
@@ -51,7 +51,7 @@ def run(args) -> int:
                 "sigma": args.sigma,
                 "peb_definition": "sqrt(tr J^-1), metres",
                 "peb": values,
-                "stats": stats.to_dict(),
+                "stats": stats,
             },
         )
     return 0

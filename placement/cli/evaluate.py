@@ -55,7 +55,7 @@ def run(args) -> int:
     )
     t0 = time.perf_counter()
     ev = evaluate_layout(
-        room, anchors, realizations=args.realizations, seed=args.seed, snr_db=args.snr
+        room, anchors, realizations=args.realizations, rng=args.seed, snr_db=args.snr
     )
     seconds = time.perf_counter() - t0
     data = ev.to_dict()

@@ -16,9 +16,12 @@ def register(sub) -> None:
         "report",
         help="write a self-contained HTML report (figures embedded) of a result folder",
         description="Read RESULT_DIR/result.json (anchorplan plan) and/or "
-        "RESULT_DIR/evaluation.json (anchorplan evaluate) and write one HTML file with the "
-        "settings, layout coordinates, error statistics, PEB (sqrt(tr J^-1), metres), the "
-        "bound-versus-simulation gap and the figures. No network access, no external files.",
+        "RESULT_DIR/evaluation.json (anchorplan evaluate) and write one HTML file: the "
+        "layout (coordinates, plan view, error statistics), its comparison with a naive "
+        "layout of the same M (anchors spread evenly along the top edges of the mounting "
+        "walls) and the paper's corners layout (error statistics, both DOPs, PEB "
+        "sqrt(tr J^-1) in metres, the bound-versus-simulation gap), the figures, and the "
+        "settings. No network access, no external files.",
     )
     p.add_argument("result_dir", metavar="RESULT_DIR", help="folder with result/evaluation.json")
     p.add_argument("--out", metavar="FILE.html", help="output file (RESULT_DIR/report.html)")
@@ -26,8 +29,8 @@ def register(sub) -> None:
         "--realizations",
         type=int,
         default=10,
-        help="realizations simulated here for the corners reference and per-axis errors "
-        "(10; 0: no simulation)",
+        help="realizations simulated here for the naive and corners comparisons and per-axis "
+        "errors (10; 0: no simulation)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of those simulations (0)")
     p.add_argument(
@@ -40,7 +43,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from analysis.noise import SIGMA_RANGE
-    from analysis.report import load_results, write_report
+    from analysis.report import load_results, main_anchors, room_of, write_report
+    from placement.surfaces import naive_layout
 
     result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
     if args.out is not None:
@@ -56,28 +60,29 @@ def run(args) -> int:
         lo, hi = SIGMA_RANGE
         checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
     try:
-        load_results(result_dir)
+        data = load_results(result_dir)
+        room = room_of(data)
+        naive = naive_layout(room, len(main_anchors(data)))
     except (ValueError, FileNotFoundError) as exc:
-        msg = str(exc) if "RESULT_DIR" in str(exc) else f"RESULT_DIR {result_dir}: {exc}"
-        raise ValueError(msg) from None
+        raise _refused(result_dir, exc) from None
+    except (TypeError, KeyError, IndexError, AttributeError) as exc:  # malformed result files
+        raise _malformed(result_dir, exc) from None
     t0 = time.perf_counter()
     try:
         path, rep = write_report(
             result_dir,
             args.out,
             realizations=args.realizations,
-            seed=args.seed,
+            rng=args.seed,
+            comparisons={"naive": naive},
             sigma=args.sigma,
             dpi=args.dpi,
             figures_dir=args.figures,
         )
     except ValueError as exc:
-        msg = str(exc) if "RESULT_DIR" in str(exc) else f"RESULT_DIR {result_dir}: {exc}"
-        raise ValueError(msg) from None
+        raise _refused(result_dir, exc) from None
     except (TypeError, KeyError, IndexError, AttributeError) as exc:  # malformed result files
-        raise ValueError(
-            f"RESULT_DIR {result_dir}: the result files are malformed ({type(exc).__name__}: {exc})"
-        ) from None
+        raise _malformed(result_dir, exc) from None
     for note in rep.notes:
         print(f"note: {note}")
     size = path.stat().st_size / 1024
@@ -86,3 +91,14 @@ def run(args) -> int:
         f"{len(rep.layouts)} layouts, {time.perf_counter() - t0:.1f} s)"
     )
     return 0
+
+
+def _refused(result_dir, exc: Exception) -> ValueError:
+    msg = str(exc)
+    return ValueError(msg if "RESULT_DIR" in msg else f"RESULT_DIR {result_dir}: {msg}")
+
+
+def _malformed(result_dir, exc: Exception) -> ValueError:
+    return ValueError(
+        f"RESULT_DIR {result_dir}: the result files are malformed ({type(exc).__name__}: {exc})"
+    )

@@ -1,8 +1,10 @@
 """The peer simulator: received windows from pyroomacoustics impulse responses.
 
 Used by the tests and benchmarks to hold :mod:`simulation.received` against an
-independent implementation; pyroomacoustics is a test/benchmark dependency only and is
-imported inside the function.
+independent implementation. It is not part of the installed package: pyroomacoustics is a
+test/benchmark dependency only (imported inside the function). The tests import it as
+``peer`` (pytest puts ``tests/`` on ``sys.path``); ``benchmarks/bench_simulator.py`` adds
+``tests/`` to ``sys.path`` itself.
 
 Pipeline per anchor: a ``pra.ShoeBox`` with the room's size, sound speed, image-source
 order and the same materials per wall (``pra.Material(energy_absorption=α)``, names

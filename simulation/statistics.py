@@ -1,0 +1,197 @@
+"""Error statistics and DOP of simulated positions: the one home of these formulas.
+
+The lowest layer that needs them is the simulation (:class:`simulation.Evaluation`), so
+they live here; :mod:`analysis`, :mod:`placement` and the report import them from here
+(docs/model.md, "Monte Carlo evaluation and error statistics" and "Dilution of
+precision").
+
+Shapes: Euclidean errors ``errors`` are (R, P) for R noise realizations at P nodes (any
+shape for :func:`error_stats`), signed range errors ``range_errors`` (R, P, M) for M
+anchors. Lengths in metres.
+
+Non-finite errors (NaN or ±inf) mark failed position fixes. They are never dropped
+silently:
+
+* :func:`error_stats` computes every statistic over the finite errors and reports how
+  many were left out (``n_invalid``, beside ``n`` used);
+* the per-node statistics (:func:`node_mean`, :func:`node_std`, :func:`node_rmse`) use a
+  node's finite errors and give +inf for a node without any (its error is unbounded);
+* the cost statistics :data:`STATISTICS` give +inf as soon as one error is not finite:
+  a layout with a failed fix cannot be scored (the optimizers' convention).
+
+Range errors must be finite (the receiver always returns a range).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from simulation import checks
+
+__all__ = [
+    "STATISTICS",
+    "axis_errors",
+    "dop",
+    "dop_rms",
+    "error_stats",
+    "euclidean_errors",
+    "node_mean",
+    "node_rmse",
+    "node_std",
+    "range_std",
+]
+
+#: the percentile reported as "p95" (numpy's default linear interpolation)
+PERCENTILE = 95
+
+
+# -- errors from estimates ----------------------------------------------------------------------
+def _difference(estimates, truth) -> np.ndarray:
+    e = checks.reals("estimates", estimates, finite=False)
+    t = checks.reals("truth", truth, finite=False)
+    try:
+        return e - t
+    except ValueError:
+        raise ValueError(
+            f"estimates/truth: shapes {e.shape} and {t.shape} do not broadcast"
+        ) from None
+
+
+def euclidean_errors(estimates, truth) -> np.ndarray:
+    """‖p̂ − p‖ over the last axis: estimates (..., P, 3), truth (P, 3) → (..., P) metres."""
+    return np.linalg.norm(_difference(estimates, truth), axis=-1)
+
+
+def axis_errors(estimates, truth) -> np.ndarray:
+    """Absolute per-axis errors |p̂ − p|, (..., P, 3) metres (paper Fig. 3)."""
+    return np.abs(_difference(estimates, truth))
+
+
+# -- summary over all errors --------------------------------------------------------------------
+def error_stats(errors) -> dict[str, float | int]:
+    """Summary of Euclidean errors (any shape, metres) over all finite entries.
+
+    Returns ``{"std", "mean", "p95", "rms", "median", "max", "n", "n_invalid"}``: ``std``
+    is the population standard deviation (ddof = 0), the paper's σ (§V-B, Table I);
+    ``mean`` the paper's μ; ``p95`` the 95th percentile (linear interpolation); ``rms`` =
+    √mean e². ``n`` counts the finite errors used and ``n_invalid`` the non-finite ones
+    left out (failed fixes); without any finite error every statistic is NaN.
+    """
+    e = checks.reals("errors", errors, finite=False).ravel()
+    v = e[np.isfinite(e)]
+    out: dict[str, float | int]
+    if v.size == 0:
+        out = dict.fromkeys(("std", "mean", "p95", "rms", "median", "max"), math.nan)
+    else:
+        out = {
+            "std": float(np.std(v)),
+            "mean": float(np.mean(v)),
+            "p95": float(np.percentile(v, PERCENTILE)),
+            "rms": float(np.sqrt(np.mean(v * v))),
+            "median": float(np.median(v)),
+            "max": float(np.max(v)),
+        }
+    out["n"] = int(v.size)
+    out["n_invalid"] = int(e.size - v.size)
+    return out
+
+
+def _strict(fn: Callable[[np.ndarray], float]) -> Callable[[np.ndarray], float]:
+    def stat(errors) -> float:
+        e = np.asarray(errors, dtype=float)
+        return fn(e) if np.all(np.isfinite(e)) else math.inf
+
+    stat.__doc__ = fn.__doc__
+    return stat
+
+
+#: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost, lower
+#: is better; each is +inf if some error is not finite. "variance" is the paper's cost
+#: (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
+STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
+    "variance": _strict(lambda e: float(np.var(e))),
+    "mean": _strict(lambda e: float(np.mean(e))),
+    "p95": _strict(lambda e: float(np.percentile(e, PERCENTILE))),
+    "rms": _strict(lambda e: float(np.sqrt(np.mean(e * e)))),
+}
+
+
+# -- per node -----------------------------------------------------------------------------------
+def _per_node(errors) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(errors with non-finite entries zeroed, finite mask, finite count per node)."""
+    e = checks.reals("errors", errors, finite=False)
+    if e.ndim != 2:
+        raise ValueError(f"errors: expected shape (R, P), got {e.shape}")
+    ok = np.isfinite(e)
+    return np.where(ok, e, 0.0), ok, ok.sum(axis=0)
+
+
+def _node_average(total: np.ndarray, n: np.ndarray) -> np.ndarray:
+    out = np.full(total.shape, np.inf)
+    np.divide(total, n, out=out, where=n > 0)
+    return out
+
+
+def node_mean(errors) -> np.ndarray:
+    """(P,) mean over the realizations of each node's finite errors (R, P); +inf if none."""
+    e, _, n = _per_node(errors)
+    return _node_average(e.sum(axis=0), n)
+
+
+def node_rmse(errors) -> np.ndarray:
+    """(P,) RMS √mean_r e_rp² over each node's finite errors (R, P); +inf if none."""
+    e, _, n = _per_node(errors)
+    return np.sqrt(_node_average(np.sum(e * e, axis=0), n))
+
+
+def node_std(errors) -> np.ndarray:
+    """(P,) population standard deviation over the realizations of each node's finite
+    errors (R, P), σ^p of the paper's DOP (§V-A); +inf for a node without any."""
+    e, ok, n = _per_node(errors)
+    mean = _node_average(e.sum(axis=0), n)
+    dev = np.where(ok, e - np.where(np.isfinite(mean), mean, 0.0), 0.0)
+    return np.sqrt(_node_average(np.sum(dev * dev, axis=0), n))
+
+
+def range_std(range_errors) -> np.ndarray:
+    """(P,) σ_r^p: mean over the anchors of the standard deviation over the realizations
+    of the range error, range_errors (R, P, M) in metres (paper §V-A)."""
+    r = checks.reals("range_errors", range_errors)
+    if r.ndim != 3:
+        raise ValueError(f"range_errors: expected shape (R, P, M), got {r.shape}")
+    return np.mean(np.std(r, axis=0), axis=-1)
+
+
+# -- dilution of precision ----------------------------------------------------------------------
+def _ratio(errors, range_errors, spread: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    e = checks.reals("errors", errors, finite=False)
+    r = checks.reals("range_errors", range_errors)
+    if e.ndim != 2 or r.ndim != 3 or r.shape[:2] != e.shape:
+        raise ValueError(
+            "errors/range_errors: expected shapes (R, P) and (R, P, M), "
+            f"got {e.shape} and {r.shape}"
+        )
+    sigma_r = range_std(r)
+    out = np.full(sigma_r.shape, np.inf)
+    np.divide(spread(e), sigma_r, out=out, where=sigma_r > 0)
+    return out
+
+
+def dop(errors, range_errors) -> np.ndarray:
+    """(P,) the paper's DOP (§V-A): σ^p / σ_r^p, with σ^p the standard deviation over the
+    R realizations of the Euclidean error at node p (:func:`node_std`) and σ_r^p the
+    :func:`range_std`; +inf where σ_r = 0 (e.g. one realization).
+
+    errors (R, P) Euclidean errors, range_errors (R, P, M) signed range errors (m).
+    """
+    return _ratio(errors, range_errors, node_std)
+
+
+def dop_rms(errors, range_errors) -> np.ndarray:
+    """(P,) the RMS-based DOP: RMSE^p / σ_r^p with RMSE^p = √mean_r e_rp² (:func:`node_rmse`);
+    +inf where σ_r = 0. It counts a node's mean error as well as its spread (RMSE² = σ² +
+    mean², so dop_rms ≥ :func:`dop`): a steady multipath bias raises it, not the paper's."""
+    return _ratio(errors, range_errors, node_rmse)
