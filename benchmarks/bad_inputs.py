@@ -81,7 +81,7 @@ def one_arg_cost(anchors):
 
 FAST = PSOOptions(particles=3, iterations=1)
 BAD_COUNTS = [True, False, 2.5, "3", -1, None, [3], float("nan")]
-PLAN_KW = dict(cost="peb", seeds=None, validate_realizations=0, progress=False, seed=0)
+PLAN_KW = dict(cost="peb", seeds=None, validate_realizations=0, progress=False, rng=0)
 BAD_REALS = [True, "1", None, float("nan"), float("inf"), [1.0], 1j]
 
 
@@ -264,7 +264,7 @@ def _ignored_option_cases() -> None:
         seeds="auto",
         validate_realizations=0,
         progress=False,
-        seed=0,
+        rng=0,
         particles=2,
         iterations=1,
         nodes=NODES,
@@ -292,19 +292,19 @@ def _failed_result_cases() -> None:
             "failed-result",
             f"pso(cost={label})",
             "cost",
-            lambda v=v: pso(v, ROOM, 4, options=FAST, seed=0),
+            lambda v=v: pso(v, ROOM, 4, options=FAST, rng=0),
         )
     api(
         "failed-result",
         "pso(one-argument cost) runs",
         "cost",
-        lambda: pso(one_arg_cost, ROOM, 4, options=FAST, seed=0).success,
+        lambda: pso(one_arg_cost, ROOM, 4, options=FAST, rng=0).success,
         check=True,
     )
 
     def unpicklable():
         with placement.WorkerPool(2) as ex:
-            return pso(lambda a, r: 1.0, ROOM, 4, options=FAST, seed=0, executor=ex)
+            return pso(lambda a, r: 1.0, ROOM, 4, options=FAST, rng=0, executor=ex)
 
     api("failed-result", "pso(lambda cost, executor=WorkerPool)", "cost", unpicklable)
     for v in ["x", 5]:
@@ -509,7 +509,7 @@ def _bound_and_projection_cases() -> None:
             iterations=2,
             validate_realizations=0,
             progress=False,
-            seed=0,
+            rng=0,
         )
         from simulation.checks import geometry
 

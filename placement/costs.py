@@ -18,14 +18,11 @@ import numpy as np
 from analysis.fim import peb
 from simulation import checks
 from simulation.room import Room
+from simulation.statistics import STATISTICS
 
-#: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost
-SIMULATED_STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
-    "variance": lambda e: float(np.var(e)),
-    "mean": lambda e: float(np.mean(e)),
-    "p95": lambda e: float(np.percentile(e, 95)),
-    "rms": lambda e: float(np.sqrt(np.mean(e * e))),
-}
+#: statistics of the simulated Euclidean errors usable as a cost (+inf when an error is not
+#: finite); one home: :data:`simulation.statistics.STATISTICS`
+SIMULATED_STATISTICS = STATISTICS
 
 COST_NAMES = (*SIMULATED_STATISTICS, "peb")
 
@@ -60,14 +57,11 @@ class SimulatedCost:
             self.room,
             anchors,
             realizations=int(self.realizations),
-            seed=int(rng.integers(2**63)),
+            rng=rng,
             nodes=self.nodes,
             precision=self.precision,
         )
-        e = np.asarray(ev.errors, dtype=float)
-        if not np.all(np.isfinite(e)):
-            return math.inf
-        return SIMULATED_STATISTICS[self.statistic](e)
+        return SIMULATED_STATISTICS[self.statistic](np.asarray(ev.errors, dtype=float))
 
 
 @dataclass(frozen=True)
@@ -116,7 +110,7 @@ class DrawsCost:
             self.nodes,
             exact_draws=self.exact_draws,
             mount_tolerance=self.mount_tolerance,
-            seed=self.seed,
+            rng=self.seed,
             chunk=len(a),
             precision=self.precision,
         )
@@ -127,10 +121,7 @@ class DrawsCost:
 
         if anchor_rank(anchors) < 2:  # collinear: the position is not determined
             return math.inf
-        e = self.errors(anchors)
-        if not np.all(np.isfinite(e)):
-            return math.inf
-        return SIMULATED_STATISTICS[self.statistic](e)
+        return SIMULATED_STATISTICS[self.statistic](self.errors(anchors))
 
 
 @dataclass(frozen=True)

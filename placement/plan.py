@@ -141,7 +141,7 @@ class PlacementResult:
 
 
 def analytic_seeds(
-    room: Room, M: int, *, sigma: float = 0.04, nodes=None, seed: int | None = None
+    room: Room, M: int, *, sigma: float = 0.04, nodes=None, rng=None
 ) -> list[SeedLayout]:
     """The "auto" seeds: A- and D-optimal relaxations, their PEB refinements, and the
     best random layouts by mean PEB. A seed whose solver fails is logged and skipped."""
@@ -149,6 +149,7 @@ def analytic_seeds(
     from placement.relaxation import relax_select
 
     nodes = room.grid() if nodes is None else nodes
+    seed = checks.entropy("rng", rng)
     out: list[SeedLayout] = []
 
     def add(name, anchors):
@@ -161,7 +162,7 @@ def analytic_seeds(
 
     for criterion in ("A", "D"):
         try:
-            sel = relax_select(room, M, criterion=criterion, sigma=sigma, nodes=nodes, seed=seed)
+            sel = relax_select(room, M, criterion=criterion, sigma=sigma, nodes=nodes, rng=seed)
             add(f"relax-{criterion}", sel.anchors)
             add(
                 f"relax-{criterion}+refine", refine_peb(room, sel.anchors, sigma=sigma, nodes=nodes)
@@ -275,7 +276,7 @@ def search_seeds(
     statistic: str,
     options: SearchOptions,
     nodes,
-    seed: int,
+    rng: int,
     sigma: float,
     executor: Executor | None,
     workers: int,
@@ -289,6 +290,7 @@ def search_seeds(
     from placement import simselect
 
     sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
+    seed = checks.entropy("rng", rng)
     print_ = _search_fingerprint(room, M, options, statistic, nodes, seed)
     if sidecar is not None and sidecar.exists():
         saved = _load_sidecar(sidecar)
@@ -312,7 +314,7 @@ def search_seeds(
         draws=options.draws,
         exact_draws=options.exact_draws,
         mount_tolerance=options.mount_tolerance,
-        seed=seed,
+        rng=seed,
         executor=executor,
         precision=options.precision,
         progress=bar.update,
@@ -325,7 +327,7 @@ def search_seeds(
         statistic=statistic,
         options=options,
         table=table,
-        seed=seed,
+        rng=seed,
         executor=executor,
         workers=workers,
         progress=lambda stage, done, total: bar.update(done, total, stage),
@@ -462,12 +464,13 @@ def seed_then_pso(
     realizations: int = 1,
     executor: Executor | None = None,
     workers: int | None = None,
-    seed: int | None = None,
+    rng=None,
     progress: bool = True,
     callback=None,
     checkpoint=None,
     sigma: float = 0.04,
     nodes=None,
+    seed=checks.UNSET,
 ) -> PlacementResult:
     """Plan M anchors: range-table search → swarm → finalists → validation (module doc).
 
@@ -493,7 +496,9 @@ def seed_then_pso(
         :class:`placement.costs.SimulatedCost`-style cost (names use fixed draws instead).
     executor, workers : a ``concurrent.futures.Executor`` and its number of workers (the
         search splits its descents into that many jobs); results do not depend on them.
-    seed : makes the run reproducible (the same result serially or in parallel).
+    rng : an int makes the run reproducible (the same result serially or in parallel, and
+        resumable from a checkpoint); a numpy Generator is drawn once; ``seed=`` is its
+        deprecated alias.
     checkpoint : a file for the swarm's state after every iteration (the search's result
         beside it); rerunning with the same arguments resumes.
     """
@@ -540,8 +545,8 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     )
     sigma = checks.real("sigma", kw["sigma"], low=0.0, high=10.0, low_open=True, unit="m")
     tol = checks.real("mount_tolerance", kw["mount_tolerance"], low=0.0, high=1.0, unit="m")
-    seed = checks.seed("seed", kw["seed"])
-    entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
+    rng = checks.rng_or_seed(kw["rng"], kw["seed"], owner="seed_then_pso")
+    entropy = checks.entropy("rng", rng)
     search = _search_options(kw["search"])
     cost = kw["cost"]
     cost_fn = make_cost(
@@ -619,7 +624,7 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
             statistic=run["cost"],
             options=run["search"],
             nodes=run["nodes"],
-            seed=_substream(run["entropy"], 1),
+            rng=_substream(run["entropy"], 1),
             sigma=run["sigma"],
             executor=run["executor"],
             workers=run["workers"],
@@ -628,7 +633,7 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
         )
         clock.lap("search", summary.get("nfev"))
     elif isinstance(seeds, str):
-        out = analytic_seeds(room, M, sigma=run["sigma"], nodes=run["nodes"], seed=run["entropy"])
+        out = analytic_seeds(room, M, sigma=run["sigma"], nodes=run["nodes"], rng=run["entropy"])
         clock.lap("seeding")
     elif seeds is not None:
         grid = room.grid() if run["nodes"] is None else run["nodes"]
@@ -656,7 +661,7 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
         initial=initial,
         options=run["swarm"],
         executor=run["executor"],
-        seed=run["entropy"],
+        rng=run["entropy"],
         progress=run["progress"],
         callback=run["callback"],
         checkpoint=run["checkpoint"],
@@ -694,7 +699,7 @@ def _validate(room: Room, run: dict, anchors, success: bool, clock: _Clock) -> d
         out = validate_layout(
             room,
             anchors,
-            seed=_substream(run["entropy"], 4),
+            rng=_substream(run["entropy"], 4),
             options=run["validation"],
             mount_tolerance=run["mount_tolerance"],
             nodes=run["nodes"],

@@ -95,9 +95,8 @@ class PSOOptions:
         offset of this standard deviation (m) (:func:`initial_positions`).
     tol, patience : stop when the best cost improved by less than ``tol`` (relative) over
         the last ``patience`` iterations (paper: "improvement per iteration stays under a
-        threshold"); ``tol = 0`` runs all iterations. The single-realization cost is
-        noisy and the best cost is a lucky draw, so improvements come in rare steps: with a
-        patience of 8, seeded swarms stopped after 14 of 40 iterations (measured), hence 20.
+        threshold"); ``tol = 0`` runs all iterations. With a noisy cost, improvements come
+        in rare steps, hence a long default patience.
 
     Allowed: particles 2–10⁴, iterations 1–10⁵, inertia [0, 1], cognitive and social
     [0, 4], velocity_clamp (0, 1], init_velocity and tol [0, 1], patience ≥ 1.
@@ -623,15 +622,19 @@ def pso(
     options: PSOOptions | None = None,
     executor: Executor | None = None,
     chunksize: int | None = None,
-    seed: int | None = None,
+    rng=None,
     progress: bool = False,
     callback: Callable[[PSOResult], bool | None] | None = None,
     checkpoint: str | os.PathLike | None = None,
     cost_label: str | None = None,
     eval_timeout: float | None = None,
+    seed=checks.UNSET,
 ) -> PSOResult:
     """Minimize ``cost(anchors, rng)`` over layouts of M anchors on the mounting surfaces.
 
+    rng : an int (reproducible; resuming from a checkpoint needs one), a numpy
+        ``Generator`` (drawn once for the run's seed) or None; ``seed=`` is its deprecated
+        alias.
     initial : (S, M, 3) seed layouts placed first in the swarm (projected onto the
         surfaces), S ≤ particles; the other particles are area-proportional random layouts.
     executor : any ``concurrent.futures.Executor`` (process pool, Dask's
@@ -667,7 +670,8 @@ def pso(
     cost = _check_cost(cost, executor)
     if chunksize is not None:
         chunksize = checks.count("chunksize", chunksize, low=1)
-    seed = checks.seed("seed", seed)
+    rng = checks.rng_or_seed(rng, seed, owner="pso")
+    seed = None if rng is None else checks.entropy("rng", rng)
     progress = checks.flag("progress", progress)
     if callback is not None and not callable(callback):
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")

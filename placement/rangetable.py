@@ -35,10 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from placement.costs import SIMULATED_STATISTICS
 from placement.surfaces import mounting_surfaces, project, surface_index
 from simulation import checks
 from simulation.room import Room
+from simulation.statistics import STATISTICS
 
 
 @dataclass(frozen=True)
@@ -105,10 +105,12 @@ def node_region(room: Room, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def node_draws(room: Room, nodes, draws: int, exact_draws: int, seed: int) -> np.ndarray:
+def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.ndarray:
     """(D, P, 3) node sets: the first ``exact_draws`` are ``nodes`` (P, 3); in the others
     every node moves uniformly within ±½ grid cell on each axis (:func:`cell_size`),
-    staying in its region (:func:`node_region`)."""
+    staying in its region (:func:`node_region`). Draw d moves by the stream (3, d) of the
+    int seed ``rng`` (a Generator is drawn once)."""
+    seed = checks.entropy("rng", rng)
     p = np.asarray(nodes, dtype=float)
     half = cell_size(p) / 2
     lo, hi = node_region(room, p)
@@ -123,11 +125,13 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, seed: int) -> np
 
 
 def mounted_points(
-    room: Room, candidates, ids, draw: int, tolerance: float, exact: bool, seed: int
+    room: Room, candidates, ids, draw: int, tolerance: float, exact: bool, rng=0
 ) -> np.ndarray:
     """(n, 3) where candidates (n, 3) with table indices ``ids`` end up in ``draw``: the
     planned point moved in its surface plane by a uniform offset within a disc of radius
-    ``tolerance`` (m), projected back onto the mounting surfaces; unchanged when ``exact``."""
+    ``tolerance`` (m), projected back onto the mounting surfaces; unchanged when ``exact``.
+    Candidate j's offset comes from the stream (2, j, draw) of the int seed ``rng``."""
+    seed = checks.entropy("rng", rng)
     c = np.asarray(candidates, dtype=float)
     if exact or tolerance == 0:
         return c.copy()
@@ -211,7 +215,7 @@ def range_table(
     draws: int = 1,
     exact_draws: int = 1,
     mount_tolerance: float = 0.0,
-    seed: int = 0,
+    rng=0,
     executor: Executor | None = None,
     chunk: int = 16,
     precision: str = "float32",
@@ -223,18 +227,21 @@ def range_table(
         explicit node sets (then ``draws`` is D).
     exact_draws : how many draws keep the nodes and the planned points exactly.
     mount_tolerance : radius (m) of the in-plane mounting error in the other draws.
+    rng : an int seed of every stream of the table (see the module), a numpy Generator
+        (drawn once) or None.
     chunk : candidates simulated per task (memory ≈ chunk · P · 192 · 16 bytes).
     precision : the receiver DSP's precision (see :class:`simulation.receiver.Dsp`).
     progress : an optional callable ``progress(done, total)`` called as chunks finish.
     """
     cand = room.check_anchors(candidates, min_anchors=1)
+    seed = checks.entropy("rng", rng)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     if nodes.ndim == 2:
-        nodes = node_draws(room, nodes, int(draws), int(exact_draws), int(seed))
+        nodes = node_draws(room, nodes, int(draws), int(exact_draws), seed)
     spec = {
         "exact_draws": int(exact_draws),
         "mount_tolerance": float(mount_tolerance),
-        "seed": int(seed),
+        "seed": seed,
         "precision": precision,
     }
     ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, int(chunk), progress)
@@ -287,11 +294,11 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     whose anchors are collinear."""
     S = np.asarray(layouts, dtype=int)
     e = table_errors(table, S)
-    stat = SIMULATED_STATISTICS[statistic]
+    stat = STATISTICS[statistic]
     # collinear or coincident anchors leave the position undetermined: never a solution
     fixed = checks.anchor_rank(table.candidates[S]) >= 2
     rows = zip(e, np.atleast_1d(fixed), strict=True)
-    return np.array([stat(r) if ok and np.all(np.isfinite(r)) else math.inf for r, ok in rows])
+    return np.array([stat(r) if ok else math.inf for r, ok in rows])
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

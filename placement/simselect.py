@@ -357,7 +357,7 @@ def simulated_select(
     options: SearchOptions | None = None,
     table: RangeTable | None = None,
     nodes=None,
-    seed: int = 0,
+    rng=0,
     executor: Executor | None = None,
     workers: int = 1,
     progress=None,
@@ -367,6 +367,8 @@ def simulated_select(
 
     table : a table to search (built from ``options`` and ``nodes`` when None; it grows
         by the fine lattices and is returned in the result).
+    rng : an int seed of the table and of every chain's stream, a numpy Generator (drawn
+        once) or None.
     executor, workers : the chains run as ``workers`` jobs on ``executor``; the result
         does not depend on either.
     progress : an optional callable ``progress(stage, done, total)`` reporting the search
@@ -374,6 +376,7 @@ def simulated_select(
     """
     opt = options or SearchOptions()
     M = checks.count("M", M, low=4, high=1000)
+    seed = checks.entropy("rng", rng)
     t0 = time.perf_counter()
     if table is None:
         cand = new_points(np.empty((0, 3)), candidate_grid(room, opt.spacing))
@@ -386,7 +389,7 @@ def simulated_select(
             draws=opt.draws,
             exact_draws=opt.exact_draws,
             mount_tolerance=opt.mount_tolerance,
-            seed=seed,
+            rng=seed,
             executor=executor,
             precision=opt.precision,
         )

@@ -24,10 +24,10 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from analysis.statistics import dop
 from placement.rangetable import mounted_points, node_region
 from simulation import checks
 from simulation.room import Room
+from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
 
 
 @dataclass(frozen=True)
@@ -57,15 +57,10 @@ class ValidationOptions:
 
 
 def summary(errors) -> dict[str, float]:
-    """σ (population), mean, P95 and RMS (m) of Euclidean errors, and how many."""
-    e = np.asarray(errors, dtype=float).ravel()
-    return {
-        "std": float(np.std(e)),
-        "mean": float(np.mean(e)),
-        "p95": float(np.percentile(e, 95)),
-        "rms": float(np.sqrt(np.mean(e * e))),
-        "n": int(e.size),
-    }
+    """σ (population), mean, P95 and RMS (m) of Euclidean errors, and how many
+    (:func:`simulation.statistics.error_stats`)."""
+    s = error_stats(np.asarray(errors, dtype=float).ravel())
+    return {k: s[k] for k in ("std", "mean", "p95", "rms", "n", "n_invalid")}
 
 
 def held_out_grid(room: Room) -> np.ndarray:
@@ -100,7 +95,7 @@ def _evaluate(room, anchors, nodes, realizations, seed, precision):
     from simulation.evaluation import evaluate_layout
 
     return evaluate_layout(
-        room, anchors, realizations=realizations, seed=seed, nodes=nodes, precision=precision
+        room, anchors, realizations=realizations, rng=seed, nodes=nodes, precision=precision
     )
 
 
@@ -148,7 +143,7 @@ def validate_layout(
     room: Room,
     anchors,
     *,
-    seed: int,
+    rng,
     options: ValidationOptions | None = None,
     mount_tolerance: float = 0.03,
     nodes=None,
@@ -160,13 +155,16 @@ def validate_layout(
 
     Keys: ``realizations``, ``seed``, ``std``, ``mean``, ``p95``, ``rms`` (m, the grid
     check over all R · P errors), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
-    ``per_node`` (RMSE and RMS-based DOP per node), ``errors`` (R, P); ``held_out``
+    ``per_node`` (RMSE, σ, the paper's DOP and the RMS-based DOP per node), ``errors``
+    (R, P); ``held_out``
     with ``grid`` and ``random`` summaries; ``mounting`` with its summary. Each check
-    draws its noise from its own stream of ``seed``. Checks run on ``executor`` when
+    draws its noise from its own stream of ``rng`` (an int seed, a numpy Generator drawn
+    once, or None). Checks run on ``executor`` when
     given; the result does not depend on it. ``progress(done, total)`` is called as the
     checks' parts finish.
     """
     opt = options or ValidationOptions()
+    seed = checks.entropy("rng", rng)
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     out: dict[str, Any] = {}
@@ -208,8 +206,10 @@ def validate_layout(
             "mean_peb": float(np.mean(peb(a, nodes, sigma))),
             "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
             "per_node": {
-                "rmse": np.sqrt(np.mean(e * e, axis=0)).tolist(),
+                "rmse": node_rmse(e).tolist(),
+                "std": node_std(e).tolist(),
                 "dop": dop(e, range_errors).tolist(),
+                "dop_rms": dop_rms(e, range_errors).tolist(),
             },
             "errors": np.round(e, 6).tolist(),
         }

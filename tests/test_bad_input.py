@@ -133,7 +133,7 @@ def test_relax_solver_opts_is_a_mapping():
 # -- bad input is an error, not a failed result ---------------------------------------------
 @pytest.mark.parametrize("cost", [5, "variance", None, lambda: 1.0, lambda a, b, c: 1.0])
 def test_pso_cost_must_be_callable_with_anchors_and_rng(cost):
-    refused("cost", lambda: pso(cost, ROOM, 4, options=FAST, seed=0))
+    refused("cost", lambda: pso(cost, ROOM, 4, options=FAST, rng=0))
 
 
 def peb_of(anchors):
@@ -141,7 +141,7 @@ def peb_of(anchors):
 
 
 def test_pso_accepts_a_one_argument_cost_as_seed_then_pso_does():
-    res = pso(peb_of, ROOM, 4, options=FAST, seed=0)
+    res = pso(peb_of, ROOM, 4, options=FAST, rng=0)
     assert res.success and res.failures == 0 and np.isfinite(res.cost)
 
 
@@ -213,7 +213,7 @@ def test_collinear_anchors_are_flagged_not_reported_converged():
 
 def test_swarm_scores_collinear_layouts_inf():
     line = np.array([[1, 2, 2.37], [3, 2, 2.37], [5, 2, 2.37], [7, 2, 2.37]])
-    res = pso(peb_of, ROOM, 4, options=FAST, initial=line[None], seed=0)
+    res = pso(peb_of, ROOM, 4, options=FAST, initial=line[None], rng=0)
     assert np.isinf(res.costs[0][0]) and res.failures == 0
     assert placement.on_surfaces(ROOM, res.anchors).all() and np.isfinite(res.cost)
 

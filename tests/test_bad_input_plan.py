@@ -14,7 +14,7 @@ from simulation.checks import geometry
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]
 TINY = dict(cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0)
-TINY.update(progress=False, seed=0)
+TINY.update(progress=False, rng=0)
 
 
 def refused(name, fn, within=5.0):
@@ -99,7 +99,7 @@ def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
     from placement.validation import ValidationOptions
 
     ckpt = tmp_path / "state.json"
-    kw = dict(cost="variance", particles=3, iterations=2, seed=0, progress=False)
+    kw = dict(cost="variance", particles=3, iterations=2, rng=0, progress=False)
     kw.update(nodes=NODES, finalists=1, checkpoint=ckpt)
     kw["validation"] = ValidationOptions(realizations=0)
     kw["search"] = SearchOptions(

@@ -74,14 +74,14 @@ class StallOnce:
 def test_a_killed_worker_costs_its_particles_only(tmp_path):
     cost = KillOnce(str(tmp_path / "killed"))
     with WorkerPool(2) as pool:
-        res = pso(cost, ROOM, 4, options=OPTIONS, seed=1, executor=pool, chunksize=1)
+        res = pso(cost, ROOM, 4, options=OPTIONS, rng=1, executor=pool, chunksize=1)
         assert pool.lost == 1 and pool.restarts >= 1
     assert res.success and res.nit == OPTIONS.iterations
     assert res.failures == 1 and res.extra["lost"] == 1
     costs = np.asarray(res.costs)
     assert np.isinf(costs).sum() == 1 and np.isinf(costs[0]).sum() == 1
     # every other evaluation of the first iteration is exactly the serial one
-    serial = pso(mean_peb, ROOM, 4, options=PSOOptions(particles=6, iterations=1), seed=1)
+    serial = pso(mean_peb, ROOM, 4, options=PSOOptions(particles=6, iterations=1), rng=1)
     ok = np.isfinite(costs[0])
     np.testing.assert_array_equal(costs[0][ok], np.asarray(serial.costs)[0][ok])
 
@@ -106,12 +106,12 @@ def test_plain_process_pool_breaking_raises_after_the_checkpoint(tmp_path):
     options = PSOOptions(particles=6, iterations=4, tol=0.0)
     with ProcessPoolExecutor(2) as ex:
         with pytest.raises(ExecutorBroken, match=r"iteration 2 .*state.json holds iteration 1"):
-            pso(cost, ROOM, 4, options=options, seed=3, executor=ex, checkpoint=ckpt,
+            pso(cost, ROOM, 4, options=options, rng=3, executor=ex, checkpoint=ckpt,
                 callback=arm, cost_label="kill")  # fmt: skip
     assert json.loads(ckpt.read_text())["iteration"] == 1
     # the rerun resumes and ends with the result of an uninterrupted run
-    resumed = pso(mean_peb, ROOM, 4, options=options, seed=3, checkpoint=ckpt, cost_label="kill")
-    full = pso(mean_peb, ROOM, 4, options=options, seed=3)
+    resumed = pso(mean_peb, ROOM, 4, options=options, rng=3, checkpoint=ckpt, cost_label="kill")
+    full = pso(mean_peb, ROOM, 4, options=options, rng=3)
     assert resumed.extra["resumed_from"] == 1
     assert resumed.history == full.history
 
@@ -123,10 +123,10 @@ def test_eval_timeout_makes_the_particle_inf(tmp_path, monkeypatch, mode):
     options = PSOOptions(particles=4, iterations=2, tol=0.0)
     t0 = time.monotonic()
     if mode == "serial":
-        res = pso(cost, ROOM, 4, options=options, seed=0, eval_timeout=0.5)
+        res = pso(cost, ROOM, 4, options=options, rng=0, eval_timeout=0.5)
     else:
         with WorkerPool(2) as pool:
-            res = pso(cost, ROOM, 4, options=options, seed=0, executor=pool, eval_timeout=0.5)
+            res = pso(cost, ROOM, 4, options=options, rng=0, executor=pool, eval_timeout=0.5)
     assert time.monotonic() - t0 < 30
     assert res.success and res.extra["timeouts"] >= 1 and res.failures == res.extra["timeouts"]
     assert res.extra["lost"] == 0

@@ -21,7 +21,7 @@ QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=
 
 
 def _plan(**kw):
-    base = dict(search=SMALL, particles=4, iterations=2, validation=QUICK, seed=0)
+    base = dict(search=SMALL, particles=4, iterations=2, validation=QUICK, rng=0)
     base.update(progress=False, nodes=NODES)
     base.update(kw)
     return seed_then_pso(ROOM, 4, **base)
@@ -30,7 +30,7 @@ def _plan(**kw):
 def test_seed_then_pso_bound_driven_with_user_seeds():
     seeds = ROOM.corners_layout()[None]
     res = seed_then_pso(
-        ROOM, 4, particles=6, iterations=5, cost="peb", seeds=seeds, seed=0, progress=False,
+        ROOM, 4, particles=6, iterations=5, cost="peb", seeds=seeds, rng=0, progress=False,
         validate_realizations=0,
     )  # fmt: skip
     assert res.anchors.shape == (4, 3)
@@ -45,10 +45,10 @@ def test_seed_then_pso_bound_driven_with_user_seeds():
 
 
 def test_the_drawn_cost_is_a_range_table_of_the_layout():
-    sets = node_draws(ROOM, NODES, 2, 1, seed=3)
+    sets = node_draws(ROOM, NODES, 2, 1, rng=3)
     cost = DrawsCost(ROOM, sets, exact_draws=1, mount_tolerance=0.03, seed=9)
     a = ROOM.corners_layout()
-    t = range_table(ROOM, a, sets, exact_draws=1, mount_tolerance=0.03, seed=9)
+    t = range_table(ROOM, a, sets, exact_draws=1, mount_tolerance=0.03, rng=9)
     e = table_errors(t, np.arange(4)[None])[0]
     assert cost(a) == pytest.approx(np.var(e)) and cost(a) == cost(a, None)  # deterministic
     assert DrawsCost(ROOM, sets, exact_draws=1, mount_tolerance=0.03, seed=10)(a) != cost(a)
@@ -83,7 +83,7 @@ def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws()
 
 def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
     res = _plan()
-    fresh = DrawsCost(ROOM, node_draws(ROOM, NODES, 2, 1, seed=1), exact_draws=1, seed=4)
+    fresh = DrawsCost(ROOM, node_draws(ROOM, NODES, 2, 1, rng=1), exact_draws=1, seed=4)
     one = choose_finalist(res.pso, res.seeds, fresh, 2)
     with ThreadPoolExecutor(2) as ex:
         two = choose_finalist(res.pso, res.seeds, fresh, 2, ex)
@@ -92,9 +92,9 @@ def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
 
 
 def test_same_result_serially_and_with_an_executor():
-    a = _plan(seed=5)
+    a = _plan(rng=5)
     with ThreadPoolExecutor(2) as ex:
-        b = _plan(seed=5, executor=ex, workers=2)
+        b = _plan(rng=5, executor=ex, workers=2)
     np.testing.assert_array_equal(a.anchors, b.anchors)
     assert a.validation["std"] == b.validation["std"]
     assert a.validation["held_out"] == b.validation["held_out"]
@@ -122,11 +122,11 @@ def test_seed_then_pso_rejects_bad_input():
 
 def test_validation_checks_are_reproducible_and_independent_of_the_executor():
     a = ROOM.corners_layout()
-    v1 = validate_layout(ROOM, a, seed=3, options=QUICK, nodes=NODES)
+    v1 = validate_layout(ROOM, a, rng=3, options=QUICK, nodes=NODES)
     with ThreadPoolExecutor(2) as ex:
-        v2 = validate_layout(ROOM, a, seed=3, options=QUICK, nodes=NODES, executor=ex)
+        v2 = validate_layout(ROOM, a, rng=3, options=QUICK, nodes=NODES, executor=ex)
     assert v1 == v2
     assert v1["held_out"]["grid"]["nodes"] == 420
     assert v1["mounting"]["n"] == 2 * len(NODES)
-    v3 = validate_layout(ROOM, a, seed=4, options=QUICK, nodes=NODES)
+    v3 = validate_layout(ROOM, a, rng=4, options=QUICK, nodes=NODES)
     assert v3["std"] != v1["std"]

@@ -37,14 +37,14 @@ def test_every_evaluated_layout_is_on_the_surfaces():
         seen.append(anchors.copy())
         return float(np.mean(placement_peb(anchors)))
 
-    res = pso(make_cost(cost, ROOM), ROOM, 5, options=FAST, seed=3)
+    res = pso(make_cost(cost, ROOM), ROOM, 5, options=FAST, rng=3)
     assert len(seen) == res.nfev == FAST.particles * FAST.iterations
     assert placement.on_surfaces(ROOM, np.concatenate(seen)).all()
     assert placement.on_surfaces(ROOM, res.anchors).all()
 
 
 def test_history_non_increasing_and_improves():
-    res = pso(PEBCost(ROOM), ROOM, 4, options=PSOOptions(tol=0.0), seed=0)
+    res = pso(PEBCost(ROOM), ROOM, 4, options=PSOOptions(tol=0.0), rng=0)
     h = np.array(res.history)
     assert len(h) == res.nit == 40
     assert np.all(np.diff(h) <= 0)
@@ -57,22 +57,22 @@ def test_history_non_increasing_and_improves():
 
 
 def test_same_seed_same_result_and_seed_layouts_used():
-    a = pso(noisy_peb, ROOM, 4, options=FAST, seed=11)
-    b = pso(noisy_peb, ROOM, 4, options=FAST, seed=11)
+    a = pso(noisy_peb, ROOM, 4, options=FAST, rng=11)
+    b = pso(noisy_peb, ROOM, 4, options=FAST, rng=11)
     np.testing.assert_array_equal(a.anchors, b.anchors)
     assert a.history == b.history
-    c = pso(noisy_peb, ROOM, 4, options=FAST, seed=12)
+    c = pso(noisy_peb, ROOM, 4, options=FAST, rng=12)
     assert a.history != c.history
     seed_layout = ROOM.corners_layout()[None]
-    d = pso(PEBCost(ROOM), ROOM, 4, initial=seed_layout, options=FAST, seed=1)
+    d = pso(PEBCost(ROOM), ROOM, 4, initial=seed_layout, options=FAST, rng=1)
     assert d.costs[0][0] == pytest.approx(np.mean(placement_peb(ROOM.corners_layout())))
 
 
 def test_serial_equals_process_pool():
-    serial = pso(noisy_peb, ROOM, 4, options=FAST, seed=5)
+    serial = pso(noisy_peb, ROOM, 4, options=FAST, rng=5)
     with ProcessPoolExecutor(max_workers=2) as ex:
-        parallel = pso(noisy_peb, ROOM, 4, options=FAST, seed=5, executor=ex)
-        chunked = pso(noisy_peb, ROOM, 4, options=FAST, seed=5, executor=ex, chunksize=3)
+        parallel = pso(noisy_peb, ROOM, 4, options=FAST, rng=5, executor=ex)
+        chunked = pso(noisy_peb, ROOM, 4, options=FAST, rng=5, executor=ex, chunksize=3)
     for other in (parallel, chunked):
         np.testing.assert_array_equal(serial.anchors, other.anchors)
         assert serial.history == other.history
@@ -80,7 +80,7 @@ def test_serial_equals_process_pool():
 
 
 def test_failing_cost_does_not_stop_the_run(caplog):
-    res = pso(flaky_peb, ROOM, 4, options=FAST, seed=2)
+    res = pso(flaky_peb, ROOM, 4, options=FAST, rng=2)
     assert res.success and np.isfinite(res.cost)
     assert res.failures > 0
     assert np.isinf(res.costs).sum() == res.failures
@@ -93,7 +93,7 @@ class Kill(BaseException):
 
 @pytest.mark.parametrize("kill_at", [1, 5, 9])
 def test_resume_equals_uninterrupted(tmp_path, kill_at):
-    full = pso(noisy_peb, ROOM, 4, options=FAST, seed=7)
+    full = pso(noisy_peb, ROOM, 4, options=FAST, rng=7)
     ckpt = tmp_path / "state.json"
     calls = {"n": 0}
 
@@ -105,9 +105,9 @@ def test_resume_equals_uninterrupted(tmp_path, kill_at):
         return noisy_peb(anchors, rng)
 
     with pytest.raises(Kill):
-        pso(dying, ROOM, 4, options=FAST, seed=7, checkpoint=ckpt, cost_label="noisy")
+        pso(dying, ROOM, 4, options=FAST, rng=7, checkpoint=ckpt, cost_label="noisy")
     assert ckpt.exists()
-    resumed = pso(noisy_peb, ROOM, 4, options=FAST, seed=7, checkpoint=ckpt, cost_label="noisy")
+    resumed = pso(noisy_peb, ROOM, 4, options=FAST, rng=7, checkpoint=ckpt, cost_label="noisy")
     np.testing.assert_array_equal(resumed.anchors, full.anchors)
     assert resumed.history == full.history
     np.testing.assert_array_equal(resumed.costs, full.costs)
@@ -115,9 +115,9 @@ def test_resume_equals_uninterrupted(tmp_path, kill_at):
 
 def test_checkpoint_of_other_run_is_not_used(tmp_path):
     ckpt = tmp_path / "state.json"
-    pso(noisy_peb, ROOM, 4, options=FAST, seed=7, checkpoint=ckpt)
-    other = pso(noisy_peb, ROOM, 4, options=FAST, seed=8, checkpoint=ckpt)
-    fresh = pso(noisy_peb, ROOM, 4, options=FAST, seed=8)
+    pso(noisy_peb, ROOM, 4, options=FAST, rng=7, checkpoint=ckpt)
+    other = pso(noisy_peb, ROOM, 4, options=FAST, rng=8, checkpoint=ckpt)
+    fresh = pso(noisy_peb, ROOM, 4, options=FAST, rng=8)
     assert other.history == fresh.history
 
 
@@ -128,7 +128,7 @@ def test_callback_can_stop():
         ROOM,
         4,
         options=FAST,
-        seed=0,
+        rng=0,
         callback=lambda r: seen.append(r.nit) or r.nit >= 4,
     )
     assert res.nit == 4 and seen == [2, 3, 4]
@@ -136,7 +136,7 @@ def test_callback_can_stop():
 
 
 def test_tolerance_stops_early():
-    res = pso(PEBCost(ROOM), ROOM, 4, options=PSOOptions(tol=0.5, patience=3), seed=0)
+    res = pso(PEBCost(ROOM), ROOM, 4, options=PSOOptions(tol=0.5, patience=3), rng=0)
     assert res.nit == 4 and "improved by less" in res.message
 
 
@@ -161,8 +161,8 @@ def test_bad_cost_name():
 def test_serial_equals_dask():
     from dask import distributed
 
-    serial = pso(noisy_peb, ROOM, 4, options=FAST, seed=5)
+    serial = pso(noisy_peb, ROOM, 4, options=FAST, rng=5)
     with distributed.Client(processes=False, n_workers=2, dashboard_address=None) as client:
-        on_dask = pso(noisy_peb, ROOM, 4, options=FAST, seed=5, executor=client.get_executor())
+        on_dask = pso(noisy_peb, ROOM, 4, options=FAST, rng=5, executor=client.get_executor())
     np.testing.assert_array_equal(serial.anchors, on_dask.anchors)
     assert serial.history == on_dask.history

@@ -35,19 +35,19 @@ def test_a_range_depends_on_its_own_anchor_only():
 
 
 def test_range_table_is_independent_of_chunking_and_executor():
-    kw = dict(draws=3, exact_draws=1, mount_tolerance=0.03, seed=4)
+    kw = dict(draws=3, exact_draws=1, mount_tolerance=0.03, rng=4)
     t1 = range_table(ROOM, CAND[:10], NODES, chunk=3, **kw)
     with ThreadPoolExecutor(2) as ex:
         t2 = range_table(ROOM, CAND[:10], NODES, chunk=7, executor=ex, **kw)
     np.testing.assert_array_equal(t1.ranges, t2.ranges)
     assert t1.ranges.shape == (3, len(NODES), 10) and t1.windows == 3 * len(NODES) * 10
     assert not np.array_equal(t1.ranges[0], t1.ranges[1])
-    t3 = range_table(ROOM, CAND[:10], NODES, chunk=3, **{**kw, "seed": 5})
+    t3 = range_table(ROOM, CAND[:10], NODES, chunk=3, **{**kw, "rng": 5})
     assert not np.array_equal(t1.ranges, t3.ranges)
 
 
 def test_extended_table_equals_the_bigger_table():
-    kw = dict(draws=2, exact_draws=1, mount_tolerance=0.03, seed=1)
+    kw = dict(draws=2, exact_draws=1, mount_tolerance=0.03, rng=1)
     small = range_table(ROOM, CAND[:6], NODES, **kw)
     grown = extend_table(ROOM, small, CAND[6:11])
     whole = range_table(ROOM, CAND[:11], NODES, **kw)
@@ -57,14 +57,14 @@ def test_extended_table_equals_the_bigger_table():
 
 def test_draws_move_nodes_within_their_cells_and_anchors_within_the_tolerance():
     nodes = ROOM.grid()
-    sets = node_draws(ROOM, nodes, 3, 1, seed=2)
+    sets = node_draws(ROOM, nodes, 3, 1, rng=2)
     np.testing.assert_array_equal(sets[0], nodes)
     step = np.array([0.9875, 0.78, 0.575])
     move = np.abs(sets[1:] - nodes)
     assert np.all(move <= step / 2 + 1e-9) and np.mean(move > 0.01) > 0.7  # walls clip
     assert np.all(ROOM.contains(sets.reshape(-1, 3), margin=ROOM.node_margin - 1e-12))
     c = CAND[:12]
-    m = mounted_points(ROOM, c, np.arange(12), 1, 0.03, False, seed=3)
+    m = mounted_points(ROOM, c, np.arange(12), 1, 0.03, False, rng=3)
     d = np.linalg.norm(m - c, axis=1)
     assert np.all(d <= 0.03 + 1e-12) and np.all(on_surfaces(ROOM, m))
     # in the plane of its own surface: the coordinate across the plane does not move
@@ -74,7 +74,7 @@ def test_draws_move_nodes_within_their_cells_and_anchors_within_the_tolerance():
 
 
 def test_table_errors_are_the_located_nodes_of_every_draw():
-    t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, seed=1)
+    t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, rng=1)
     S = np.array([0, 6, 12, 19])
     x = simulation.locate(CAND[S], t.ranges[:, :, S], region=REGION)
     e = np.linalg.norm(x - t.nodes, axis=-1).ravel()
@@ -84,14 +84,14 @@ def test_table_errors_are_the_located_nodes_of_every_draw():
 
 
 def test_layouts_scored_in_one_batch_score_as_one_by_one():
-    t = range_table(ROOM, CAND[:12], NODES, draws=2, seed=3)
+    t = range_table(ROOM, CAND[:12], NODES, draws=2, rng=3)
     rng = np.random.default_rng(2)
     layouts = np.stack([rng.choice(12, 4, replace=False) for _ in range(6)])
     np.testing.assert_array_equal(table_costs(t, layouts), [table_cost(t, S) for S in layouts])
 
 
 def test_descent_returns_a_local_optimum_of_its_neighbourhood():
-    t = range_table(ROOM, CAND[:14], NODES, seed=2)
+    t = range_table(ROOM, CAND[:14], NODES, rng=2)
     nbr = nearest(t.candidates, 6)
     from placement.simselect import _Scorer
 
@@ -116,7 +116,7 @@ def _small(**kw):
 
 
 def test_simulated_select_returns_local_optima_better_than_random():
-    sel = simulated_select(ROOM, 4, options=_small(), nodes=NODES, seed=0)
+    sel = simulated_select(ROOM, 4, options=_small(), nodes=NODES, rng=0)
     t = sel.table
     assert sel.message == "local optimum"
     assert sel.anchors.shape == (4, 3) and on_surfaces(ROOM, sel.anchors).all()
@@ -139,7 +139,7 @@ def test_simulated_select_returns_local_optima_better_than_random():
 
 
 def test_simulated_select_is_the_same_serially_with_an_executor_and_any_workers():
-    kw = dict(options=_small(chains=3), nodes=NODES, seed=11)
+    kw = dict(options=_small(chains=3), nodes=NODES, rng=11)
     s1 = simulated_select(ROOM, 4, **kw)
     with ThreadPoolExecutor(2) as ex:
         s2 = simulated_select(ROOM, 4, executor=ex, workers=2, **kw)
@@ -149,7 +149,7 @@ def test_simulated_select_is_the_same_serially_with_an_executor_and_any_workers(
 
 
 def test_a_chain_advanced_in_segments_equals_one_go():
-    t = range_table(ROOM, CAND, NODES, seed=0)
+    t = range_table(ROOM, CAND, NODES, rng=0)
     nbr = nearest(t.candidates, 8)
     kw = dict(batch=4, patience=3, budget=120)
     one = Chain.start(t, 4, "variance", 3, np.random.default_rng(5))
@@ -162,8 +162,8 @@ def test_a_chain_advanced_in_segments_equals_one_go():
 
 
 def test_fine_lattice_grows_the_table_and_the_result_is_not_worse():
-    coarse = simulated_select(ROOM, 4, options=_small(), nodes=NODES, seed=3)
-    fine = simulated_select(ROOM, 4, options=_small(fine_spacings=(1.0,)), nodes=NODES, seed=3)
+    coarse = simulated_select(ROOM, 4, options=_small(), nodes=NODES, rng=3)
+    fine = simulated_select(ROOM, 4, options=_small(fine_spacings=(1.0,)), nodes=NODES, rng=3)
     assert len(fine.candidates) > len(coarse.candidates)
     assert fine.cost <= coarse.cost + 1e-12
     assert on_surfaces(ROOM, fine.candidates).all()
@@ -180,7 +180,7 @@ def test_search_options_are_checked():
     ):
         with pytest.raises(ValueError, match=name):
             SearchOptions(**kw)
-    t = range_table(ROOM, CAND[:6], NODES, seed=0)
+    t = range_table(ROOM, CAND[:6], NODES, rng=0)
     with pytest.raises(ValueError, match="candidates"):
         simulated_select(ROOM, 8, table=t, options=_small())
     with pytest.raises(ValueError, match="M"):

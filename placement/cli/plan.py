@@ -211,7 +211,7 @@ def run(args) -> int:
                 finalist_draws=args.finalist_draws,
                 executor=executor,
                 workers=workers if executor is not None else 1,
-                seed=args.seed,
+                rng=args.seed,
                 progress=not args.no_progress,
                 checkpoint=args.checkpoint,
                 validate_realizations=args.validate_realizations,
