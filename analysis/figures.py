@@ -1174,3 +1174,42 @@ def pso_evolution(
         ax.set_title(f"t = {t}: {sub}", fontsize=9, y=0.95)
     _colorbar(bottom, sc, axs, "PEB (m)", extend, shrink=0.75)
     return fig
+
+
+def sweep_curves(
+    rows: Sequence[Mapping],
+    target_p95: float | None = None,
+    paper: Mapping[int, Mapping[str, float]] | None = None,
+    dpi: float = 100,
+) -> Figure:
+    """σ, mean and P95 (m) of the validated error against the anchor count M, from rows
+    with keys ``M``, ``std``, ``mean``, ``p95``; the target P95 as a horizontal line and
+    reference points (e.g. the paper's Table I: {M: {"std", "mean", "p95"}}) as hollow
+    markers."""
+    fig = new_figure((6.4, 4.0), dpi=dpi)
+    ax = fig.add_subplot()
+    M = np.array([r["M"] for r in rows], dtype=int)
+    styles = (("std", "σ", "o", PALETTE[0]), ("mean", "mean", "s", PALETTE[1]),
+              ("p95", "P95", "^", PALETTE[2]))  # fmt: skip
+    for key, label, marker, color in styles:
+        y = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        ax.plot(M, y, marker=marker, color=color, label=label)
+        if paper:
+            pm = sorted(m for m in paper if key in paper[m])
+            ax.plot(pm, [paper[m][key] for m in pm], linestyle="none", marker=marker,
+                    markerfacecolor="none", color=color, markersize=9)  # fmt: skip
+    if target_p95 is not None:
+        ax.axhline(target_p95, color="black", linestyle="--", linewidth=1)
+        ax.annotate(f"target P95 {target_p95:g} m", (M.min(), target_p95),
+                    textcoords="offset points", xytext=(2, 4), fontsize=8)  # fmt: skip
+    handles, labels = ax.get_legend_handles_labels()
+    if paper:
+        handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="none",
+                              color="grey"))  # fmt: skip
+        labels.append("paper, Table I")
+    ax.legend(handles, labels, fontsize=8)
+    ax.set_xlabel("anchors M")
+    ax.set_ylabel("Euclidean error (m)")
+    ax.set_xticks(M)
+    ax.grid(alpha=0.3)
+    return fig

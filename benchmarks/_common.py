@@ -11,13 +11,7 @@ from pathlib import Path
 # Run from a checkout without installing: make the top-level packages importable.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-#: the paper's Table I (§V-B): σ, mean and P95 of the Euclidean error in metres
-PAPER_TABLE1 = {
-    4: {"std": 0.803, "mean": 0.995, "p95": 2.629},
-    6: {"std": 0.691, "mean": 0.913, "p95": 2.272},
-    8: {"std": 0.587, "mean": 0.797, "p95": 1.986},
-    10: {"std": 0.563, "mean": 0.773, "p95": 1.876},
-}
+from analysis.paper import TABLE1 as PAPER_TABLE1  # noqa: E402, F401  (re-exported)
 
 
 def best_time(fn, repeat: int = 5, number: int = 1) -> float:

@@ -282,16 +282,19 @@ def search_seeds(
     workers: int,
     checkpoint: Path | None = None,
     progress: bool = False,
+    table=None,
 ) -> tuple[list[SeedLayout], dict[str, Any]]:
     """The simulation-driven seeds: the ``options.keep`` best distinct optima of
-    :func:`placement.simselect.simulated_select`, and the search's summary. With a
+    :func:`placement.simselect.simulated_select` on ``table`` (built from ``options`` when
+    None), and the search's summary (with ``table_nodes``, the draws' node sets). With a
     ``checkpoint``, a finished search is saved beside it (``<checkpoint>.search.json``)
     and reused by a rerun with the same arguments."""
     from placement import simselect
 
     sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
     seed = checks.entropy("rng", rng)
-    print_ = _search_fingerprint(room, M, options, statistic, nodes, seed)
+    origin = seed if table is None else [table.seed, list(table.ranges.shape)]
+    print_ = _search_fingerprint(room, M, options, statistic, nodes, origin)
     if sidecar is not None and sidecar.exists():
         saved = _load_sidecar(sidecar)
         if saved.get("fingerprint") == print_:
@@ -306,20 +309,21 @@ def search_seeds(
     from placement.simselect import new_points
     from placement.surfaces import candidate_grid
 
-    bar = _Bar(progress, "range table")
-    table = range_table(
-        room,
-        new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
-        nodes,
-        draws=options.draws,
-        exact_draws=options.exact_draws,
-        mount_tolerance=options.mount_tolerance,
-        rng=seed,
-        executor=executor,
-        precision=options.precision,
-        progress=bar.update,
-    )
-    bar.close()
+    if table is None:
+        bar = _Bar(progress, "range table")
+        table = range_table(
+            room,
+            new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
+            nodes,
+            draws=options.draws,
+            exact_draws=options.exact_draws,
+            mount_tolerance=options.mount_tolerance,
+            rng=seed,
+            executor=executor,
+            precision=options.precision,
+            progress=bar.update,
+        )
+        bar.close()
     bar = _Bar(progress, "search")
     sel = simselect.simulated_select(
         room,
@@ -340,6 +344,7 @@ def search_seeds(
     ]
     summary = sel.to_dict()
     del summary["anchors"], summary["optima"]
+    summary["table_nodes"] = table.nodes.tolist()
     if sidecar is not None:
         _write_sidecar(sidecar, print_, seeds, summary)
     return seeds, summary
@@ -470,6 +475,7 @@ def seed_then_pso(
     checkpoint=None,
     sigma: float = 0.04,
     nodes=None,
+    table=None,
     seed=checks.UNSET,
 ) -> PlacementResult:
     """Plan M anchors: range-table search → swarm → finalists → validation (module doc).
@@ -501,6 +507,9 @@ def seed_then_pso(
         deprecated alias.
     checkpoint : a file for the swarm's state after every iteration (the search's result
         beside it); rerunning with the same arguments resumes.
+    table : a range table to search instead of building one
+        (:func:`placement.rangetable.range_table` with the search's spacing and draws), to
+        share it between runs (e.g. :func:`placement.sweep.sweep`).
     """
     room = as_room(room)
     run = _prepare(room, locals())
@@ -566,7 +575,11 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
     nodes = None if kw["nodes"] is None else checks.points("nodes", kw["nodes"])
     checkpoint = kw["checkpoint"]
+    table = kw["table"]
+    if table is not None and not hasattr(table, "ranges"):
+        raise ValueError(f"table: must be a RangeTable or None, got {checks.describe(table)}")
     return {
+        "table": table,
         "M": M,
         "cost": cost,
         "cost_fn": cost_fn,
@@ -630,7 +643,9 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
             workers=run["workers"],
             checkpoint=run["checkpoint"],
             progress=run["progress"],
+            table=run["table"],
         )
+        run["table_nodes"] = np.asarray(summary.pop("table_nodes"))
         clock.lap("search", summary.get("nfev"))
     elif isinstance(seeds, str):
         out = analytic_seeds(room, M, sigma=run["sigma"], nodes=run["nodes"], rng=run["entropy"])
@@ -652,7 +667,8 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
     cost = run["cost_fn"]
     if run["simulated"]:
         cost = _draws_cost(room, run, s.draws, s.exact_draws, key=2, nodes_key=1)
-        run["swarm_cost"] = cost
+        if "table_nodes" in run:  # the search's own draws: common random numbers
+            cost = dataclasses.replace(cost, nodes=run["table_nodes"])
     initial = np.stack([x.anchors for x in seed_layouts]) if seed_layouts else None
     res = pso(
         cost,

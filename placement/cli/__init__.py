@@ -11,6 +11,7 @@ import sys
 #: sub-command modules of this package, in the order ``--help`` lists them
 COMMANDS = (
     "plan",
+    "sweep",
     "bounds",
     "evaluate",
     "report",

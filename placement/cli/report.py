@@ -59,6 +59,8 @@ def run(args) -> int:
     if args.sigma is not None:
         lo, hi = SIGMA_RANGE
         checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+    if (result_dir / "sweep.json").is_file() and not (result_dir / "result.json").exists():
+        return _sweep_report(result_dir, args)
     try:
         data = load_results(result_dir)
         room = room_of(data)
@@ -102,3 +104,19 @@ def _malformed(result_dir, exc: Exception) -> ValueError:
     return ValueError(
         f"RESULT_DIR {result_dir}: the result files are malformed ({type(exc).__name__}: {exc})"
     )
+
+
+def _sweep_report(result_dir, args) -> int:
+    """The report of an ``anchorplan sweep`` folder."""
+    import json
+
+    from analysis.sweep_report import write_sweep_report
+
+    try:
+        path = write_sweep_report(result_dir, args.out, dpi=args.dpi)
+    except (json.JSONDecodeError, KeyError, TypeError) as exc:
+        raise ValueError(
+            f"RESULT_DIR {result_dir}: sweep.json is not a sweep result ({exc})"
+        ) from None
+    print(f"wrote {path}")
+    return 0

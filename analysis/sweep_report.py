@@ -1,0 +1,80 @@
+"""The HTML report of an anchor-count sweep folder (``sweep.json`` of ``anchorplan
+sweep``): the recommendation, the σ / mean / P95 table against M, the curves and every
+planned layout, in one self-contained file."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from pathlib import Path
+
+from analysis.figures import png_bytes, sweep_curves
+from analysis.paper import TABLE1
+
+
+def _num(v) -> str:
+    return "–" if v is None else f"{v:.3f}"
+
+
+def sweep_html(data: dict, dpi: float = 100) -> str:
+    """The report of a sweep's ``to_dict()`` (as read back from ``sweep.json``)."""
+    rows = data["rows"]
+    paper = TABLE1 if data.get("room", {}).get("name") == "techtile" else None
+    png = png_bytes(sweep_curves(rows, data.get("target_p95"), paper, dpi=dpi), palette=True)
+    target = data.get("target_p95")
+    if target is None:
+        verdict = "No target P95 was given, so no anchor count is recommended."
+    elif data.get("recommended") is None:
+        verdict = f"No anchor count of the sweep meets P95 ≤ {target:g} m."
+    else:
+        verdict = (
+            f"<b>Recommended: M = {data['recommended']}</b>, the smallest anchor count whose "
+            f"validated P95 is at most {target:g} m."
+        )
+    head = "<tr><th>M</th><th>σ (m)</th><th>mean (m)</th><th>P95 (m)</th>"
+    head += "<th>held-out σ (m)</th><th>mounting-error σ (m)</th><th>seconds</th>"
+    head += "<th>paper σ / mean / P95 (m)</th></tr>" if paper else "</tr>"
+    body = []
+    for r in rows:
+        ref = ""
+        if paper:
+            p = paper.get(r["M"])
+            ref = f"<td>{p['std']} / {p['mean']} / {p['p95']}</td>" if p else "<td>–</td>"
+        body.append(
+            f"<tr><td>{r['M']}</td><td>{_num(r['std'])}</td><td>{_num(r['mean'])}</td>"
+            f"<td>{_num(r['p95'])}</td><td>{_num(r['held_out_std'])}</td>"
+            f"<td>{_num(r['mounting_std'])}</td><td>{r['seconds']:.0f}</td>{ref}</tr>"
+        )
+    layouts = "".join(
+        f"<h3>M = {r['M']}</h3><pre>"
+        + "\n".join(f"{x:7.3f} {y:7.3f} {z:7.3f}" for x, y, z in r["anchors"])
+        + "</pre>"
+        for r in rows
+    )
+    name = html.escape(str(data.get("room", {}).get("name", "room")))
+    img = base64.b64encode(png).decode()
+    return (
+        f"<!doctype html><html><head><meta charset='utf-8'><title>anchorplan sweep: {name}"
+        "</title><style>body{font-family:sans-serif;max-width:60em;margin:auto}"
+        "td,th{padding:2px 8px;text-align:right}</style></head><body>"
+        f"<h1>How many anchors: {name}</h1><p>{verdict}</p>"
+        f"<table>{head}{''.join(body)}</table>"
+        f"<p><img alt='errors against M' src='data:image/png;base64,{img}'></p>"
+        "<p>σ, mean and P95 of the Euclidean position error at the evaluation nodes (the "
+        "paper's statistics), each layout validated with its own noise; held-out σ at nodes "
+        "the optimizer never scored; mounting-error σ with the anchors mounted within the "
+        "run's tolerance of their planned points.</p>"
+        f"<h2>Layouts (m)</h2>{layouts}"
+        f"<h2>Settings</h2><pre>{html.escape(json.dumps(data.get('settings', {}), indent=1))}"
+        "</pre></body></html>"
+    )
+
+
+def write_sweep_report(result_dir, out=None, dpi: float = 100) -> Path:
+    """Write ``report.html`` (or ``out``) for the sweep folder ``result_dir``."""
+    result_dir = Path(result_dir)
+    data = json.loads((result_dir / "sweep.json").read_text())
+    path = Path(out) if out is not None else result_dir / "report.html"
+    path.write_text(sweep_html(data, dpi=dpi))
+    return path

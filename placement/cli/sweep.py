@@ -1,0 +1,114 @@
+"""``anchorplan sweep``: how many anchors — plan every M of a range, compare, recommend."""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import time
+
+from placement.cli.common import add_room_argument, load_room, output_dir, write_json
+from placement.cli.plan import _executor
+from placement.workers import available_cores
+from simulation import checks
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="plan every anchor count of a range and recommend the smallest that meets a P95",
+        description="Plan M anchors for every M of --anchors (one shared range table), "
+        "validate each layout, and recommend the smallest M whose validated P95 meets "
+        "--target-p95. Writes sweep.json and sweep.png to --out.",
+    )
+    p.add_argument("--anchors", "-M", default="4-10", help="anchor counts, e.g. 4-10 or 4,6,8")
+    p.add_argument("--target-p95", type=float, metavar="M", help="P95 to meet, m")
+    add_room_argument(p)
+    p.add_argument("--seed", type=int, default=0, help="random seed (0)")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (0: one per core)")
+    p.add_argument(
+        "--validate-realizations", type=int, default=100, help="validation realizations (100)"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--out", metavar="DIR", default="anchorplan-sweep", help="output folder")
+    p.set_defaults(func=run, scheduler=None, eval_timeout=None)
+
+
+def parse_counts(text: str) -> list[int]:
+    """Anchor counts from "4-10", "4,6,8" or "8"."""
+    spec = str(text).strip()
+    m = re.fullmatch(r"(\d+)\s*-\s*(\d+)", spec)
+    if m:
+        lo, hi = int(m.group(1)), int(m.group(2))
+        if lo > hi:
+            raise ValueError(f"--anchors: expected LOW-HIGH with LOW <= HIGH, got {text!r}")
+        return list(range(lo, hi + 1))
+    if re.fullmatch(r"\d+(\s*,\s*\d+)*", spec):
+        return [int(v) for v in spec.split(",")]
+    raise ValueError(f"--anchors: expected a range like 4-10 or a list like 4,6,8, got {text!r}")
+
+
+def run(args) -> int:
+    from analysis.figures import save, sweep_curves
+    from analysis.paper import TABLE1
+    from placement.sweep import sweep
+
+    out = output_dir("--out", args.out)
+    room = load_room(args.room)
+    counts = [checks.count("--anchors", m, low=4, high=100) for m in parse_counts(args.anchors)]
+    if args.target_p95 is not None:
+        checks.real("--target-p95", args.target_p95, low=0.0, low_open=True, unit="m")
+    checks.count("--seed", args.seed, low=0)
+    checks.count("--workers", args.workers, low=0, high=1024)
+    checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
+    t0 = time.perf_counter()
+    with contextlib.ExitStack() as stack:
+        executor = _executor(args, stack)
+        workers = (args.workers or available_cores()) if executor is not None else 1
+        print(f"sweeping M = {counts} in {room.name}, seed {args.seed}", flush=True)
+
+        def report(M, row):
+            print(
+                f"  M = {M:2d}: sigma {row.std:.3f} m, mean {row.mean:.3f} m, "
+                f"P95 {row.p95:.3f} m ({row.seconds:.0f} s)",
+                flush=True,
+            )
+
+        res = sweep(
+            room,
+            counts,
+            target_p95=args.target_p95,
+            rng=args.seed,
+            executor=executor,
+            workers=workers,
+            validate_realizations=args.validate_realizations,
+            progress=report,
+        )
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "sweep.json").write_text(res.to_json(indent=1) + "\n")
+    rows = [r.to_dict() for r in res.rows]
+    paper = TABLE1 if room.name == "techtile" else None
+    save(sweep_curves(rows, res.target_p95, paper), out / "sweep.png")
+    write_json(out / "layouts.json", {str(r.M): r.anchors for r in res.rows})
+    _print_table(res, paper)
+    print(f"wrote {out / 'sweep.json'} and {out / 'sweep.png'} ({time.perf_counter() - t0:.0f} s)")
+    return 0
+
+
+def _print_table(res, paper) -> None:
+    head = " M   sigma    mean     P95   held-out sigma  mounting sigma"
+    print(head + ("   paper sigma/mean/P95" if paper else ""))
+    for r in res.rows:
+        ref = ""
+        if paper and r.M in paper:
+            p = paper[r.M]
+            ref = f"   {p['std']:.3f}/{p['mean']:.3f}/{p['p95']:.3f}"
+        print(
+            f"{r.M:2d}  {r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}   {r.held_out_std:13.3f}"
+            f"  {r.mounting_std:14.3f}{ref}"
+        )
+    if res.target_p95 is None:
+        print("no --target-p95: no recommendation")
+    elif res.recommended is None:
+        print(f"no M in the sweep meets P95 <= {res.target_p95:g} m")
+    else:
+        print(f"recommended: M = {res.recommended} (smallest with P95 <= {res.target_p95:g} m)")

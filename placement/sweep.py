@@ -1,0 +1,177 @@
+"""How many anchors: plan every anchor count of a range and compare their validated errors.
+
+``sweep(room, anchors=range(4, 11), target_p95=1.0)`` runs :func:`placement.seed_then_pso`
+once per M on one shared range table (the table depends on the candidate points and the
+scene draws, not on M), and recommends the smallest M whose validated P95 meets the
+target (docs/model.md, "Anchor-count sweep").
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from placement.serialization import to_jsonable
+from simulation import checks
+from simulation.room import Room, as_room
+
+
+@dataclass(frozen=True)
+class SweepRow:
+    """One anchor count: M, the validated σ, mean and P95 (m) at the evaluation nodes, the
+    held-out and mounting-error σ / P95 (m, NaN when not validated), the layout (M, 3) and
+    the seconds its plan took."""
+
+    M: int
+    std: float
+    mean: float
+    p95: float
+    held_out_std: float
+    held_out_p95: float
+    mounting_std: float
+    mounting_p95: float
+    anchors: np.ndarray
+    seconds: float
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        d["anchors"] = np.asarray(self.anchors).tolist()
+        return d
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Result of :func:`sweep`: rows (one per M, increasing), recommended the smallest M
+    whose validated P95 ≤ ``target_p95`` (None without a target or when none does), the
+    room, the settings and the seconds of the shared table and of the whole sweep."""
+
+    rows: tuple[SweepRow, ...]
+    recommended: int | None
+    target_p95: float | None
+    room: Room
+    settings: dict[str, Any] = field(default_factory=dict)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": "sweep",
+            "rows": [r.to_dict() for r in self.rows],
+            "recommended": self.recommended,
+            "target_p95": self.target_p95,
+            "room": self.room.to_dict(),
+            "settings": self.settings,
+            "timings": self.timings,
+        }
+
+    def to_json(self, **kw) -> str:
+        """Strict JSON (non-finite numbers become null)."""
+        return json.dumps(to_jsonable(self.to_dict()), **kw)
+
+
+def _counts(anchors) -> list[int]:
+    try:
+        values = list(anchors)
+    except TypeError:
+        raise ValueError(
+            f"anchors: expected anchor counts, e.g. range(4, 11), got {checks.describe(anchors)}"
+        ) from None
+    if not values:
+        raise ValueError("anchors: expected at least one anchor count, got none")
+    out = sorted({checks.count("anchors", m, low=4, high=100) for m in values})
+    return out
+
+
+def _row(M: int, res, seconds: float) -> SweepRow:
+    v = res.validation or {}
+    held = (v.get("held_out") or {}).get("grid", {})
+    mount = v.get("mounting") or {}
+    nan = math.nan
+    return SweepRow(
+        M=M,
+        std=v.get("std", nan),
+        mean=v.get("mean", nan),
+        p95=v.get("p95", nan),
+        held_out_std=held.get("std", nan),
+        held_out_p95=held.get("p95", nan),
+        mounting_std=mount.get("std", nan),
+        mounting_p95=mount.get("p95", nan),
+        anchors=np.asarray(res.anchors),
+        seconds=seconds,
+    )
+
+
+def sweep(
+    room: Room | None = None,
+    anchors=range(4, 11),
+    *,
+    target_p95: float | None = None,
+    progress=None,
+    **seed_then_pso_kwargs,
+) -> SweepResult:
+    """Plan each anchor count in ``anchors`` with :func:`placement.seed_then_pso` (its
+    keyword arguments pass through; every M uses the same ``rng``) on one shared range
+    table, and recommend the smallest M whose validated P95 (m) ≤ ``target_p95``.
+
+    progress : an optional callable ``progress(M, row)`` called after each M.
+    """
+    from placement.plan import _search_options, seed_then_pso
+    from placement.rangetable import range_table
+    from placement.simselect import new_points
+    from placement.surfaces import candidate_grid
+
+    room = as_room(room)
+    counts = _counts(anchors)
+    if target_p95 is not None:
+        target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")
+    kw = dict(seed_then_pso_kwargs)
+    if "table" in kw:
+        raise ValueError("table: sweep builds the shared table itself; do not pass one")
+    t0 = time.perf_counter()
+    search = _search_options(kw.pop("search", None))
+    entropy = checks.entropy("rng", kw.pop("rng", 0))
+    table = None
+    if (
+        kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
+        and kw.get("seeds", "auto") == "auto"
+    ):
+        cand = new_points(np.empty((0, 3)), candidate_grid(room, search.spacing))
+        if len(cand) < max(counts):
+            raise ValueError(
+                f"anchors: {max(counts)} anchors exceed the {len(cand)} candidate points "
+                f"(spacing {search.spacing:g} m) of this room"
+            )
+        table = range_table(
+            room,
+            cand,
+            kw.get("nodes"),
+            draws=search.draws,
+            exact_draws=search.exact_draws,
+            mount_tolerance=search.mount_tolerance,
+            rng=entropy,
+            executor=kw.get("executor"),
+            precision=search.precision,
+        )
+    t_table = time.perf_counter() - t0
+    rows = []
+    for M in counts:
+        t = time.perf_counter()
+        res = seed_then_pso(room, M, search=search, rng=entropy, table=table, **kw)
+        rows.append(_row(M, res, time.perf_counter() - t))
+        if progress:
+            progress(M, rows[-1])
+    recommended = None
+    if target_p95 is not None:
+        recommended = next((r.M for r in rows if r.p95 <= target_p95), None)
+    return SweepResult(
+        rows=tuple(rows),
+        recommended=recommended,
+        target_p95=target_p95,
+        room=room,
+        settings={"anchors": counts, "rng": entropy, "search": search.__dict__},
+        timings={"table": t_table, "total": time.perf_counter() - t0},
+    )

@@ -1,0 +1,66 @@
+import json
+
+import numpy as np
+import pytest
+
+import placement
+from placement.cli import main
+from placement.cli.sweep import parse_counts
+from placement.simselect import SearchOptions
+from placement.sweep import sweep
+from placement.validation import ValidationOptions
+from simulation import Room
+
+ROOM = Room.techtile()
+NODES = ROOM.grid()[::27]
+SMALL = SearchOptions(
+    spacing=2.0, chains=1, evaluations=30, random_starts=3, neighbours=8, batch=4, patience=3
+)
+QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10, mount_draws=1)
+
+
+def test_sweep_rows_and_recommendation():
+    kw = dict(search=SMALL, particles=3, iterations=1, validation=QUICK, nodes=NODES)
+    res = sweep(ROOM, [5, 4], target_p95=100.0, rng=0, progress=False, **kw)
+    assert [r.M for r in res.rows] == [4, 5]
+    for r in res.rows:
+        assert r.anchors.shape == (r.M, 3) and placement.on_surfaces(ROOM, r.anchors).all()
+        assert 0 < r.std and r.std <= r.p95 + 1e-12
+    assert res.recommended == 4  # every P95 is below 100 m: the smallest M
+    none = sweep(ROOM, [4], target_p95=1e-6, rng=0, progress=False, **kw)
+    assert none.recommended is None
+    d = json.loads(res.to_json())
+    assert d["kind"] == "sweep" and [r["M"] for r in d["rows"]] == [4, 5]
+    # the same M in a sweep and alone (same rng, same shared-table settings) agree
+    alone = sweep(ROOM, [4], rng=0, progress=False, **kw)
+    np.testing.assert_array_equal(alone.rows[0].anchors, res.rows[0].anchors)
+
+
+def test_sweep_rejects_bad_input():
+    with pytest.raises(ValueError, match="anchors"):
+        sweep(ROOM, [3, 4])
+    with pytest.raises(ValueError, match="anchors"):
+        sweep(ROOM, [])
+    with pytest.raises(ValueError, match="target_p95"):
+        sweep(ROOM, [4], target_p95=-1)
+    assert parse_counts("4-6") == [4, 5, 6] and parse_counts("4, 8") == [4, 8]
+    for bad in ("6-4", "four", "4-"):
+        with pytest.raises(ValueError, match="--anchors"):
+            parse_counts(bad)
+
+
+def test_sweep_cli_bad_input_exit_2(tmp_path, capsys):
+    assert main(["sweep", "--anchors", "3-5", "--out", str(tmp_path)]) == 2
+    assert "--anchors" in capsys.readouterr().err
+    assert main(["sweep", "--target-p95", "0", "--out", str(tmp_path)]) == 2
+    assert "--target-p95" in capsys.readouterr().err
+
+
+def test_sweep_report_renders(tmp_path):
+    from analysis.sweep_report import write_sweep_report
+
+    kw = dict(search=SMALL, particles=3, iterations=1, validation=QUICK, nodes=NODES)
+    res = sweep(ROOM, [4], target_p95=100.0, rng=0, progress=False, **kw)
+    (tmp_path / "sweep.json").write_text(res.to_json())
+    page = write_sweep_report(tmp_path).read_text()
+    assert "Recommended: M = 4" in page and "data:image/png;base64," in page
