@@ -1,137 +1,157 @@
-"""Seeded versus unseeded PSO on the simulated cost (issue 5 acceptance).
+"""seed_then_pso against the paper's Table I, per phase, and what the swarm adds.
 
-For each M and seed, runs ``seed_then_pso`` unseeded (the paper's random swarm) and seeded
-("auto": simulation-driven candidate search, relaxations + refinements, best random
-layouts) with the same evaluation noise streams, and reports the evaluations the seeded run
-needed to reach the unseeded run's final best cost, and both chosen layouts' validated σ /
-mean / P95. Each run is saved to ``DIR/M{M}_s{seed}_{swarm}.json`` (costs of every evaluation,
-history, validation, timings); runs already saved are read back instead of rerun (unless
-``--force``), so the unseeded and seeded halves can run at different times.
+For each M and seed, runs ``seed_then_pso(room, M, rng=seed)`` with its defaults and
+records:
+- the validated σ / mean / P95 (m) at the 270 nodes (R = 100, the run's own validation
+  noise), at held-out nodes (a 10 × 7 × 6 grid and 300 random points) and under mounting
+  error (3 cm, 10 draws);
+- the seconds and cost evaluations of every phase (search, swarm, finalists, validation);
+- the best seed (the lowest swarm cost at the swarm's first iteration) validated on the
+  same draws as the chosen layout: the swarm improved on its seeds when the chosen layout's
+  σ is below the best seed's;
+- with ``--unseeded``, the same run with an unseeded swarm of the paper's size (15
+  particles × 40 iterations, random start, the same cost);
+- with ``--baseline DIR``, the layouts saved in DIR (``M{M}_s{seed}_seeded.json``, e.g. the
+  earlier docs/benchmarks/pso runs) validated with the same settings and draws.
 
-Run: python benchmarks/bench_pso.py [--anchors 4 8] [--seeds 5] [--workers 2]
-     [--swarms unseeded seeded] [--iterations 40] [--validate 100] [--dir DIR]
+Each run is saved to ``DIR/M{M}_s{seed}[_unseeded].json`` and read back instead of rerun
+(unless ``--force``). One JSON line per run; ``pso_tables.py DIR`` prints the tables.
+
+Run: python benchmarks/bench_pso.py [--anchors 4 6 8 10] [--seeds 5] [--workers 2]
+     [--unseeded] [--baseline docs/benchmarks/pso] [--dir docs/benchmarks/plan]
 """
 
 import argparse
 import json
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 from _common import emit
 
+from placement import PSOOptions
 from placement.plan import seed_then_pso
-from placement.pso import nfev_to_reach
 from placement.serialization import to_jsonable
+from placement.validation import validate_layout
+from placement.workers import WorkerPool
 from simulation import Room
 
-SWARMS = {"unseeded": None, "seeded": "auto"}
 
-
-def run(room, M, seed, swarm, args, ex) -> dict:
-    t0 = time.perf_counter()
-    res = seed_then_pso(
-        room,
-        M,
-        particles=args.particles,
-        iterations=args.iterations,
-        seeds=SWARMS[swarm],
-        seed=seed,
-        executor=ex,
-        progress=False,
-        validate_realizations=args.validate,
-    )
-    v = {k: x for k, x in res.validation.items() if k not in ("errors", "per_node")}
+def _summary(v: dict) -> dict:
     return {
+        "std": v["std"],
+        "mean": v["mean"],
+        "p95": v["p95"],
+        "held_out": v.get("held_out"),
+        "mounting": v.get("mounting"),
+    }
+
+
+def _validation_rng(res) -> int:
+    """The validation stream of a run (as seed_then_pso derives it)."""
+    return int(np.random.SeedSequence(res.settings["seed"], spawn_key=(4,)).generate_state(1)[0])
+
+
+def run(room, M, seed, args, ex, unseeded=False) -> dict:
+    t0 = time.perf_counter()
+    kw = {}
+    if unseeded:
+        kw = dict(seeds=None, options=PSOOptions(particles=15, iterations=40, tol=0.0))
+    res = seed_then_pso(room, M, rng=seed, executor=ex, workers=args.workers, progress=False, **kw)
+    seconds = time.perf_counter() - t0
+    out = {
         "M": M,
         "seed": seed,
-        "swarm": swarm,
+        "swarm": "unseeded" if unseeded else "seeded",
         "anchors": res.anchors.tolist(),
         "cost": res.cost,
         "nfev": res.nfev,
         "nit": res.nit,
-        "message": res.message,
         "history": res.history,
-        "costs": np.asarray(res.pso.costs).tolist(),
-        "validation": v,
+        "validation": _summary(res.validation),
         "seeds": [s.to_dict() for s in res.seeds],
-        "finalists": [{k: f[k] for k in ("pso_cost", "cost")} for f in res.finalists],
-        "seed_search": res.settings.get("seed_search", {}),
+        "finalists": [{k: f[k] for k in ("source", "pso_cost", "cost")} for f in res.finalists],
+        "chosen": next(
+            (f["source"] for f in res.finalists if np.array_equal(f["anchors"], res.anchors)),
+            "swarm",
+        ),
+        "seed_search": {k: v for k, v in res.settings.get("seed_search", {}).items()},
         "timings": res.timings,
-        "seconds": time.perf_counter() - t0,
+        "nfev_by_phase": res.settings["nfev_by_phase"],
+        "seconds": seconds,
     }
+    if res.seeds:
+        best = min(res.seeds, key=lambda s: s.cost)
+        v = validate_layout(room, best.anchors, rng=_validation_rng(res), executor=ex)
+        out["best_seed"] = {"name": best.name, "anchors": best.anchors.tolist(), **_summary(v)}
+    return out
+
+
+def baseline(room, M, seed, folder: Path, ex) -> dict | None:
+    path = folder / f"M{M}_s{seed}_seeded.json"
+    if not path.exists():
+        return None
+    anchors = np.array(json.loads(path.read_text())["anchors"])
+    # the validation stream seed_then_pso(rng=seed) uses (plan._substream(seed, 4))
+    rng = int(np.random.SeedSequence(seed, spawn_key=(4,)).generate_state(1)[0])
+    v = validate_layout(room, anchors, rng=rng, executor=ex)
+    return {"source": str(path), "anchors": anchors.tolist(), **_summary(v)}
+
+
+def _emit(r: dict) -> None:
+    v = r["validation"]
+    h, m = v.get("held_out") or {}, v.get("mounting") or {}
+    fields = dict(
+        M=r["M"],
+        seed=r["seed"],
+        swarm=r["swarm"],
+        std=v["std"],
+        mean=v["mean"],
+        p95=v["p95"],
+        held_out_grid_std=(h.get("grid") or {}).get("std"),
+        held_out_random_std=(h.get("random") or {}).get("std"),
+        mounting_std=m.get("std"),
+        chosen=r["chosen"],
+        seconds=r["seconds"],
+        timings=r["timings"],
+        nfev_by_phase=r["nfev_by_phase"],
+    )
+    if "best_seed" in r:
+        fields["best_seed_std"] = r["best_seed"]["std"]
+        fields["swarm_improved"] = v["std"] < r["best_seed"]["std"]
+    if r.get("baseline"):
+        b = r["baseline"]
+        fields["baseline_std"] = b["std"]
+        fields["baseline_held_out_grid_std"] = b["held_out"]["grid"]["std"]
+        fields["baseline_mounting_std"] = b["mounting"]["std"]
+    emit("plan_run", **fields)
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--anchors", type=int, nargs="+", default=[4, 8])
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--anchors", type=int, nargs="+", default=[4, 6, 8, 10])
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--particles", type=int, default=15)
-    ap.add_argument("--iterations", type=int, default=40)
-    ap.add_argument("--validate", type=int, default=100)
-    ap.add_argument("--swarms", nargs="+", choices=list(SWARMS), default=list(SWARMS))
-    ap.add_argument("--dir", default="docs/benchmarks/pso")
+    ap.add_argument("--unseeded", action="store_true", help="also run unseeded swarms")
+    ap.add_argument("--baseline", metavar="DIR", help="earlier layouts to validate alike")
+    ap.add_argument("--dir", default="docs/benchmarks/plan")
     ap.add_argument("--force", action="store_true", help="rerun runs that are already saved")
     args = ap.parse_args()
     out = Path(args.dir)
     out.mkdir(parents=True, exist_ok=True)
     room = Room.techtile()
-    with ProcessPoolExecutor(max_workers=args.workers) as ex:
+    with WorkerPool(max_workers=args.workers) as ex:
         for M in args.anchors:
             for seed in range(args.seeds):
-                runs = {}
-                for swarm in SWARMS:
-                    path = out / f"M{M}_s{seed}_{swarm}.json"
+                for unseeded in (False, True) if args.unseeded else (False,):
+                    path = out / f"M{M}_s{seed}{'_unseeded' if unseeded else ''}.json"
                     if path.exists() and not args.force:
-                        runs[swarm] = json.loads(path.read_text())
                         continue
-                    if swarm not in args.swarms:
-                        continue
-                    runs[swarm] = r = run(room, M, seed, swarm, args, ex)
+                    r = run(room, M, seed, args, ex, unseeded)
+                    if args.baseline and not unseeded:
+                        r["baseline"] = baseline(room, M, seed, Path(args.baseline), ex)
                     path.write_text(json.dumps(to_jsonable(r)))
-                    emit(
-                        "pso_run",
-                        **{k: r[k] for k in ("M", "seed", "swarm", "cost", "nfev", "nit")},
-                        validated_std=r["validation"]["std"],
-                        validated_mean=r["validation"]["mean"],
-                        validated_p95=r["validation"]["p95"],
-                        mean_peb=r["validation"]["mean_peb"],
-                        seeds={s["name"]: s["cost"] for s in r["seeds"]},
-                        seconds=r["seconds"],
-                        timings=r["timings"],
-                    )
-                if len(runs) < 2:
-                    continue
-                u, s = runs["unseeded"], runs["seeded"]
-                target = u["history"][-1]  # the swarm's final best cost
-                base = nfev_to_reach(u["costs"], target)
-                need = nfev_to_reach(s["costs"], target)
-                emit(
-                    "pso_seeded_vs_unseeded",
-                    M=M,
-                    seed=seed,
-                    unseeded_final_cost=target,
-                    unseeded_nfev_to_reach=base,
-                    seeded_nfev_to_reach=need,
-                    ratio=None if need is None else need / base,
-                    seeded_final_cost=s["cost"],
-                    seeded_nfev=s["nfev"],
-                    seed_search_equivalent_evaluations=s["seed_search"].get(
-                        "equivalent_evaluations"
-                    ),
-                    seed_search_table_nfev=s["seed_search"].get("nfev"),
-                    unseeded_seconds=u["seconds"],
-                    seeded_seconds=s["seconds"],
-                    seeded_seeding_seconds=s["timings"].get("seeding"),
-                    unseeded_std=u["validation"]["std"],
-                    seeded_std=s["validation"]["std"],
-                    unseeded_mean=u["validation"]["mean"],
-                    seeded_mean=s["validation"]["mean"],
-                    unseeded_p95=u["validation"]["p95"],
-                    seeded_p95=s["validation"]["p95"],
-                )
+                    _emit(r)
 
 
 if __name__ == "__main__":

@@ -33,15 +33,15 @@ class SimulatedCost:
 
     Each call simulates ``realizations`` noisy realizations of the full chirp pipeline
     (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
-    drawn from the given generator. ``precision="float32"`` selects the faster
-    single-precision receiver DSP (same range index for about 99.9 % of pairs).
+    drawn from the given generator, with the receiver DSP in ``precision`` (see
+    :data:`simulation.receiver.DEFAULT_PRECISION`).
     """
 
     room: Room = field(default_factory=Room.techtile)
     statistic: str = "variance"
     realizations: int = 1
     nodes: np.ndarray | None = None
-    precision: str = "float64"
+    precision: str = "float32"
 
     def __post_init__(self) -> None:
         if self.statistic not in SIMULATED_STATISTICS:

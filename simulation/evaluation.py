@@ -28,7 +28,7 @@ from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
-from simulation.receiver import Receiver, dsp_for
+from simulation.receiver import DEFAULT_PRECISION, Receiver, dsp_for
 from simulation.room import Room, as_room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
@@ -55,7 +55,7 @@ class RangingScene:
         snr_db: float = DEFAULT_SNR_DB,
         chirp: Chirp | None = None,
         receiver: Receiver | None = None,
-        precision: str = "float64",
+        precision: str = DEFAULT_PRECISION,
     ):
         self.room = room = as_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
@@ -124,7 +124,7 @@ def simulate_ranges(
     snr_db: float = DEFAULT_SNR_DB,
     chirp: Chirp | None = None,
     receiver: Receiver | None = None,
-    precision: str = "float64",
+    precision: str = DEFAULT_PRECISION,
 ) -> np.ndarray:
     """(P, M) range estimates in metres from the full simulation, one realization.
 
@@ -327,7 +327,7 @@ def evaluate_layout(
     bounded: bool = False,
     max_iter: int = 100,
     chunk: int | None = None,
-    precision: str = "float64",
+    precision: str = DEFAULT_PRECISION,
     workers: int | None = None,
     seed=checks.UNSET,
 ) -> Evaluation:
@@ -339,8 +339,9 @@ def evaluate_layout(
     give fixes flagged unconverged; ``Evaluation.geometry`` names the geometry.
     ``chunk`` realizations are processed at a time (default: as many as fit in
     :data:`NOISE_BUDGET_BYTES` of noise); the result does not depend on it. ``bounded``
-    keeps the position estimates inside the room. ``precision="float32"`` selects the
-    faster single-precision DSP (see :class:`~simulation.receiver.Dsp`). ``workers``
+    keeps the position estimates inside the room. ``precision`` is the receiver DSP's
+    (default float32, :data:`~simulation.receiver.DEFAULT_PRECISION`; "float64" gives
+    the reference chain's index exactly, see :class:`~simulation.receiver.Dsp`). ``workers``
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
     ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
 
