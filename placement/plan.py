@@ -269,12 +269,39 @@ def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes
     return hashlib.sha256(blob.encode()).hexdigest()
 
 
+def build_table(
+    room: Room, options: SearchOptions, nodes, rng, executor=None, progress: bool = False
+):
+    """The range table of a run: every (deduplicated) candidate point of
+    ``candidate_grid(room, options.spacing)`` on the run's draws."""
+    from placement.rangetable import range_table
+    from placement.simselect import new_points
+    from placement.surfaces import candidate_grid
+
+    bar = _Bar(progress, "range table")
+    table = range_table(
+        room,
+        new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
+        nodes,
+        draws=options.draws,
+        exact_draws=options.exact_draws,
+        mount_tolerance=options.mount_tolerance,
+        rng=rng,
+        executor=executor,
+        precision=options.precision,
+        progress=bar.update,
+    )
+    bar.close()
+    return table
+
+
 def search_seeds(
     room: Room,
     M: int,
     *,
     statistic: str,
     options: SearchOptions,
+    table,
     nodes,
     rng: int,
     sigma: float,
@@ -282,18 +309,18 @@ def search_seeds(
     workers: int,
     checkpoint: Path | None = None,
     progress: bool = False,
-    table=None,
 ) -> tuple[list[SeedLayout], dict[str, Any]]:
     """The simulation-driven seeds: the ``options.keep`` best distinct optima of
-    :func:`placement.simselect.simulated_select` on ``table`` (built from ``options`` when
-    None), and the search's summary (with ``table_nodes``, the draws' node sets). With a
-    ``checkpoint``, a finished search is saved beside it (``<checkpoint>.search.json``)
-    and reused by a rerun with the same arguments."""
+    :func:`placement.simselect.simulated_select` on the range table (``table``: a
+    :class:`~placement.rangetable.RangeTable`, or a callable that builds it), and the
+    search's summary. With a ``checkpoint``, a finished search is saved beside it
+    (``<checkpoint>.search.json``) and reused by a rerun with the same arguments, without
+    building the table."""
     from placement import simselect
 
     sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
     seed = checks.entropy("rng", rng)
-    origin = seed if table is None else [table.seed, list(table.ranges.shape)]
+    origin = seed if callable(table) else [table.seed, list(table.ranges.shape)]
     print_ = _search_fingerprint(room, M, options, statistic, nodes, origin)
     if sidecar is not None and sidecar.exists():
         saved = _load_sidecar(sidecar)
@@ -305,25 +332,7 @@ def search_seeds(
                 for d in saved["seeds"]
             ]
             return seeds, {**saved["summary"], "resumed": True}
-    from placement.rangetable import range_table
-    from placement.simselect import new_points
-    from placement.surfaces import candidate_grid
-
-    if table is None:
-        bar = _Bar(progress, "range table")
-        table = range_table(
-            room,
-            new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
-            nodes,
-            draws=options.draws,
-            exact_draws=options.exact_draws,
-            mount_tolerance=options.mount_tolerance,
-            rng=seed,
-            executor=executor,
-            precision=options.precision,
-            progress=bar.update,
-        )
-        bar.close()
+    table = table() if callable(table) else table
     bar = _Bar(progress, "search")
     sel = simselect.simulated_select(
         room,
@@ -344,7 +353,6 @@ def search_seeds(
     ]
     summary = sel.to_dict()
     del summary["anchors"], summary["optima"]
-    summary["table_nodes"] = table.nodes.tolist()
     if sidecar is not None:
         _write_sidecar(sidecar, print_, seeds, summary)
     return seeds, summary
@@ -409,13 +417,17 @@ def choose_finalist(
     count: int,
     executor: Executor | None = None,
     progress=None,
+    refined: list[tuple[str, np.ndarray]] = (),
 ) -> list[dict[str, Any]]:
-    """Score the ``count`` best distinct particle layouts (by swarm cost) and every seed on
-    the fresh draws of ``cost``; returns one dict per finalist (``source``, ``anchors``,
-    ``pso_cost``, ``cost``), in swarm-cost order, seeds after the particles."""
-    picked: list[tuple[str, np.ndarray, float]] = []
+    """Score the ``count`` best distinct particle layouts (by swarm cost), every seed and
+    the ``refined`` layouts (name, anchors) on the fresh draws of ``cost``; returns one
+    dict per finalist (``source``, ``anchors``, ``pso_cost`` (NaN for refined layouts),
+    ``cost``): refined layouts first, then particles in swarm-cost order, then seeds."""
+    picked: list[tuple[str, np.ndarray, float]] = [
+        (name, np.asarray(a, dtype=float), math.nan) for name, a in refined
+    ]
     for i in np.argsort(res.pcost, kind="stable"):
-        if len(picked) == count or not math.isfinite(res.pcost[i]):
+        if len(picked) == count + len(refined) or not math.isfinite(res.pcost[i]):
             break
         if not any(np.allclose(res.pbest[i], a) for _, a, _ in picked):
             same = [s.name for s in seeds if np.allclose(s.anchors, res.pbest[i])]
@@ -516,7 +528,8 @@ def seed_then_pso(
     clock = _Clock()
     seed_layouts, summary = _seeds(room, run, clock)
     res = _run_swarm(room, run, seed_layouts, clock)
-    anchors, chosen, final = _choose(room, run, res, seed_layouts, clock)
+    refined = _refine(room, run, res, clock)
+    anchors, chosen, final = _choose(room, run, res, seed_layouts, refined, clock)
     validation = _validate(room, run, anchors, res.success, clock)
     success = res.success and not _degenerate(anchors)
     message = res.message if success else "no usable layout: " + res.message
@@ -626,6 +639,21 @@ def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: int, nodes_k
     )
 
 
+def _table(room: Room, run: dict):
+    """The run's range table: the one given, else built once (its draws' node sets are
+    those of the swarm's cost: stream 1 of the run)."""
+    if run.get("table") is None:
+        run["table"] = build_table(
+            room,
+            run["search"],
+            run["nodes"],
+            _substream(run["entropy"], 1),
+            run["executor"],
+            run["progress"],
+        )
+    return run["table"]
+
+
 def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict]:
     """The seed layouts of the run and the search's summary."""
     M, seeds, summary = run["M"], run["seeds"], {}
@@ -637,15 +665,15 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
             statistic=run["cost"],
             options=run["search"],
             nodes=run["nodes"],
-            rng=_substream(run["entropy"], 1),
+            rng=_substream(run["entropy"], 3),
             sigma=run["sigma"],
             executor=run["executor"],
             workers=run["workers"],
             checkpoint=run["checkpoint"],
             progress=run["progress"],
-            table=run["table"],
+            table=lambda: _table(room, run),
         )
-        run["table_nodes"] = np.asarray(summary.pop("table_nodes"))
+        run["searched"] = True
         clock.lap("search", summary.get("nfev"))
     elif isinstance(seeds, str):
         out = analytic_seeds(room, M, sigma=run["sigma"], nodes=run["nodes"], rng=run["entropy"])
@@ -667,8 +695,8 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
     cost = run["cost_fn"]
     if run["simulated"]:
         cost = _draws_cost(room, run, s.draws, s.exact_draws, key=2, nodes_key=1)
-        if "table_nodes" in run:  # the search's own draws: common random numbers
-            cost = dataclasses.replace(cost, nodes=run["table_nodes"])
+        if run.get("table") is not None:  # the table's own draws: common random numbers
+            cost = dataclasses.replace(cost, nodes=run["table"].nodes)
     initial = np.stack([x.anchors for x in seed_layouts]) if seed_layouts else None
     res = pso(
         cost,
@@ -689,15 +717,48 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
     return res
 
 
-def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, clock: _Clock):
+def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
+    """The best ``fine_optima`` distinct layouts of the swarm (seeds included) refined on
+    finer lattices of the range table (:func:`placement.simselect.refine_on_table`);
+    [(name, anchors)]. Simulated costs with fine spacings only."""
+    opt = run["search"]
+    if not (run["simulated"] and res.success and opt.fine_spacings and run.get("searched")):
+        return []
+    from placement.simselect import refine_on_table
+
+    starts: list[np.ndarray] = []
+    for i in np.argsort(res.pcost, kind="stable"):
+        if len(starts) == opt.fine_optima or not math.isfinite(res.pcost[i]):
+            break
+        if not any(np.allclose(res.pbest[i], a) for a in starts):
+            starts.append(res.pbest[i])
+    bar = _Bar(run["progress"], "refinement")
+    bar.update(0, 1)
+    out, table, nfev = refine_on_table(
+        room,
+        _table(room, run),
+        starts,
+        statistic=run["cost"],
+        options=opt,
+        rng=_substream(run["entropy"], 7),
+        executor=run["executor"],
+        workers=run["workers"],
+    )
+    bar.update(1, 1)
+    bar.close()
+    clock.lap("refinement", nfev)
+    return [(f"refined-{k + 1}", a) for k, (a, f, _) in enumerate(out) if math.isfinite(f)]
+
+
+def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock: _Clock):
     """The chosen layout, its swarm cost, and the finalists (fresh draws, simulated
     costs only); a degenerate layout is never chosen."""
     anchors, chosen, final = res.anchors, res.cost, []
-    if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts):
+    if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts or refined):
         fresh = _draws_cost(room, run, run["finalist_draws"], 1, key=5, nodes_key=6)
         bar = _Bar(run["progress"], "finalists")
         final = choose_finalist(
-            res, seed_layouts, fresh, run["finalists"], run["executor"], bar.update
+            res, seed_layouts, fresh, run["finalists"], run["executor"], bar.update, refined
         )
         bar.close()
         usable = [f for f in final if math.isfinite(f["cost"]) and not _degenerate(f["anchors"])]

@@ -205,6 +205,7 @@ class SearchOptions:
     evaluations : layouts scored per chain (the descent that finishes it comes on top).
     fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off).
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
+    fine_neighbours : the swap neighbourhood of the descents on a grown table.
     fine_optima : optima that get fine columns and descend on the grown table.
     keep : distinct optima returned as seeds.
     precision : the receiver DSP's precision for the table.
@@ -220,9 +221,10 @@ class SearchOptions:
     neighbours: int = 48
     batch: int = 24
     patience: int = 16
-    evaluations: int = 3000
-    fine_spacings: tuple[float, ...] = ()
+    evaluations: int = 7000
+    fine_spacings: tuple[float, ...] = (0.2, 0.1)
     fine_steps: int = 1
+    fine_neighbours: int = 12
     fine_optima: int = 2
     keep: int = 3
     precision: str = "float32"
@@ -243,6 +245,7 @@ class SearchOptions:
         for s in self.fine_spacings:
             checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
         checks.count("fine_steps", self.fine_steps, low=1, high=10)
+        checks.count("fine_neighbours", self.fine_neighbours, low=1, high=10_000)
         checks.count("fine_optima", self.fine_optima, low=1, high=1000)
         checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
@@ -293,9 +296,10 @@ def _finish(table, statistic, nbr, chains, seed):
 
 
 def _descents(table, statistic, nbr, layouts, seed, key):
-    """Descent of each layout (:func:`descend`) on ``table``; [(S, cost, local, n)]."""
+    """Descent (:func:`descend`) of each (number, layout) of ``layouts`` on ``table``,
+    each with the stream of its number; [(S, cost, local, n)]."""
     out = []
-    for i, S in enumerate(layouts):
+    for i, S in layouts:
         rng = _stream(seed, key, i)
         score = _Scorer(table, statistic, 10**9)
         S, f, local = descend(S, float(score([S])[0]), nbr, score, rng)
@@ -400,23 +404,58 @@ def simulated_select(
     found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
-    for level, spacing in enumerate(opt.fine_spacings):
-        best = _distinct(found)[: opt.fine_optima]
-        points = np.concatenate(
-            [fine_points(room, table.candidates[S], spacing, opt.fine_steps) for S, _ in best]
-        )
-        table = extend_table(room, table, new_points(table.candidates, points), executor=executor)
-        nbr = nearest(table.candidates, opt.neighbours)
-        jobs = [
-            (table, statistic, nbr, part, seed, 20 + level)
-            for part in _split([S for S, _ in best], max(1, workers))
-        ]
-        found = [r for part in _map(executor, _descents, jobs) for r in part] + found
-        nfev += sum(r[3] for r in found[: len(best)])
-    if progress and opt.fine_spacings:
-        progress("fine", 1, 1)
     t3 = time.perf_counter()
     return _selection(table, statistic, found, nfev, (t0, t1, t2, t3))
+
+
+def _indices(table: RangeTable, anchors: np.ndarray) -> np.ndarray:
+    """(M,) the table columns of anchors that are candidates of the table (within 1 mm)."""
+    d = np.linalg.norm(table.candidates[None] - anchors[:, None], axis=-1)
+    return np.argmin(d, axis=1)
+
+
+def refine_on_table(
+    room: Room,
+    table: RangeTable,
+    layouts,
+    *,
+    statistic: str = "variance",
+    options: SearchOptions | None = None,
+    rng=0,
+    executor: Executor | None = None,
+    workers: int = 1,
+) -> tuple[list[tuple[np.ndarray, float, bool]], RangeTable, int]:
+    """Refine layouts (k, M, 3) on finer lattices (module docstring, step 3): for each
+    spacing of ``options.fine_spacings`` in turn, the anchors of every layout and the
+    lattice points around them become table columns (:func:`extend_table`, same draws)
+    and each layout descends over its ``fine_neighbours`` nearest candidates. Returns
+    [(anchors (M, 3), table cost, local)] per layout, the grown table and the layouts
+    scored."""
+    opt = options or SearchOptions()
+    seed = checks.entropy("rng", rng)
+    current = [np.asarray(a, dtype=float) for a in layouts]
+    out = [(a, math.inf, False) for a in current]
+    nfev = 0
+    for level, spacing in enumerate(opt.fine_spacings):
+        points = np.concatenate(
+            [np.concatenate([a, fine_points(room, a, spacing, opt.fine_steps)]) for a in current]
+        )
+        table = extend_table(room, table, new_points(table.candidates, points), executor=executor)
+        nbr = nearest(table.candidates, opt.fine_neighbours)
+        starts = [_indices(table, a) for a in current]
+        jobs = [
+            (table, statistic, nbr, [(i, starts[i]) for i in part], seed, 30 + level)
+            for part in _split(list(range(len(starts))), max(1, workers))
+        ]
+        parts = _split(list(range(len(starts))), max(1, workers))
+        done: list = [None] * len(starts)
+        for part, res in zip(parts, _map(executor, _descents, jobs), strict=True):
+            for i, r in zip(part, res, strict=True):
+                done[i] = r
+        out = [(table.candidates[S], f, local) for S, f, local, _ in done]
+        nfev += sum(n for *_, n in done)
+        current = [a for a, _, _ in out]
+    return out, table, nfev
 
 
 def _selection(table, statistic, found, nfev, t) -> SimulatedSelection:
@@ -434,7 +473,7 @@ def _selection(table, statistic, found, nfev, t) -> SimulatedSelection:
         candidates=table.candidates,
         nfev=int(nfev),
         table_windows=table.windows,
-        timings={"table": t[1] - t[0], "search": t[2] - t[1], "fine": t[3] - t[2]},
+        timings={"table": t[1] - t[0], "search": t[2] - t[1]},
         message="local optimum" if local else "evaluation budget reached",
         table=table,
     )

@@ -103,7 +103,13 @@ def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
     kw.update(nodes=NODES, finalists=1, checkpoint=ckpt)
     kw["validation"] = ValidationOptions(realizations=0)
     kw["search"] = SearchOptions(
-        spacing=2.0, chains=1, evaluations=20, random_starts=2, neighbours=6, batch=3
+        spacing=2.0,
+        chains=1,
+        evaluations=20,
+        random_starts=2,
+        neighbours=6,
+        batch=3,
+        fine_spacings=(),
     )
     first = seed_then_pso(ROOM, 4, **kw)
     import placement.simselect as simselect

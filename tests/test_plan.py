@@ -15,7 +15,14 @@ from simulation import Room
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]  # 10 nodes
 SMALL = SearchOptions(
-    spacing=2.0, chains=2, evaluations=40, random_starts=3, neighbours=8, batch=4, patience=3
+    spacing=2.0,
+    chains=2,
+    evaluations=40,
+    random_starts=3,
+    neighbours=8,
+    batch=4,
+    patience=3,
+    fine_spacings=(1.0,),
 )
 QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10, mount_draws=2)
 
@@ -72,6 +79,7 @@ def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws()
     res = _plan(finalists=3)
     f = res.finalists
     assert {s.name for s in res.seeds} <= {d["source"] for d in f}  # seeds always compete
+    assert any(d["source"].startswith("refined-") for d in f)  # so do the refined layouts
     assert not any(
         np.allclose(a["anchors"], b["anchors"]) for i, a in enumerate(f) for b in f[i + 1 :]
     )

@@ -15,7 +15,14 @@ from placement.rangetable import (
     table_costs,
     table_errors,
 )
-from placement.simselect import Chain, SearchOptions, descend, nearest, simulated_select
+from placement.simselect import (
+    Chain,
+    SearchOptions,
+    descend,
+    nearest,
+    refine_on_table,
+    simulated_select,
+)
 from placement.surfaces import candidate_grid, on_surfaces, surface_index
 from simulation import Room
 
@@ -161,12 +168,23 @@ def test_a_chain_advanced_in_segments_equals_one_go():
     assert one.fbest == seg.fbest and one.nfev == seg.nfev <= 120
 
 
-def test_fine_lattice_grows_the_table_and_the_result_is_not_worse():
-    coarse = simulated_select(ROOM, 4, options=_small(), nodes=NODES, rng=3)
-    fine = simulated_select(ROOM, 4, options=_small(fine_spacings=(1.0,)), nodes=NODES, rng=3)
-    assert len(fine.candidates) > len(coarse.candidates)
-    assert fine.cost <= coarse.cost + 1e-12
-    assert on_surfaces(ROOM, fine.candidates).all()
+def test_refinement_grows_the_table_descends_and_never_worsens():
+    sel = simulated_select(ROOM, 4, options=_small(), nodes=NODES, rng=3)
+    opt = _small(fine_spacings=(1.0, 0.5))
+    start = sel.layouts(2)
+    out, grown, nfev = refine_on_table(ROOM, sel.table, start, options=opt, rng=1)
+    assert len(grown.candidates) > len(sel.table.candidates) and nfev > 0
+    assert on_surfaces(ROOM, grown.candidates).all()
+    for (a, f, local), s0 in zip(out, start, strict=True):
+        assert local and on_surfaces(ROOM, a).all()
+        idx = [int(np.argmin(np.linalg.norm(grown.candidates - p, axis=1))) for p in a]
+        assert f == pytest.approx(table_cost(grown, idx))
+        s_idx = [int(np.argmin(np.linalg.norm(grown.candidates - p, axis=1))) for p in s0]
+        assert f <= table_cost(grown, s_idx) + 1e-12
+    with ThreadPoolExecutor(2) as ex:
+        again, _, n2 = refine_on_table(ROOM, sel.table, start, options=opt, rng=1, executor=ex,
+                                       workers=2)  # fmt: skip
+    assert [f for _, f, _ in again] == [f for _, f, _ in out] and n2 == nfev
 
 
 def test_search_options_are_checked():

@@ -14,7 +14,14 @@ from simulation import Room
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]
 SMALL = SearchOptions(
-    spacing=2.0, chains=1, evaluations=30, random_starts=3, neighbours=8, batch=4, patience=3
+    spacing=2.0,
+    chains=1,
+    evaluations=30,
+    random_starts=3,
+    neighbours=8,
+    batch=4,
+    patience=3,
+    fine_spacings=(1.0,),
 )
 QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10, mount_draws=1)
 

@@ -285,7 +285,12 @@ def _print_validation(v: dict) -> None:
 
 def _print_phases(res) -> None:
     nfev = res.settings.get("nfev_by_phase", {})
-    what = {"search": "table layouts", "pso": "simulations", "finalists": "draw simulations"}
+    what = {
+        "search": "table layouts",
+        "pso": "simulations",
+        "refinement": "table layouts",
+        "finalists": "draw simulations",
+    }
     parts = []
     for phase, seconds in res.timings.items():
         if phase == "total":
