@@ -180,8 +180,8 @@ def analytic_seeds(
 #: the swarm of ``seed_then_pso`` for a simulated cost: a few particles started around the
 #: seeds, moving on the scale of the candidate grid (docs/model.md, "Planning")
 LOCAL_SWARM = PSOOptions(
-    particles=8,
-    iterations=6,
+    particles=6,
+    iterations=3,
     init_spread=0.1,
     velocity_clamp=0.03,
     init_velocity=0.01,
@@ -475,7 +475,7 @@ def seed_then_pso(
     iterations: int | None = None,
     mount_tolerance: float = 0.03,
     finalists: int = 4,
-    finalist_draws: int = 3,
+    finalist_draws: int = 4,
     validation: ValidationOptions | None = None,
     validate_realizations: int | None = None,
     realizations: int = 1,

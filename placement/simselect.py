@@ -221,11 +221,11 @@ class SearchOptions:
     neighbours: int = 48
     batch: int = 24
     patience: int = 16
-    evaluations: int = 7000
+    evaluations: int = 6000
     fine_spacings: tuple[float, ...] = (0.2, 0.1)
     fine_steps: int = 1
     fine_neighbours: int = 12
-    fine_optima: int = 2
+    fine_optima: int = 1
     keep: int = 3
     precision: str = "float32"
 

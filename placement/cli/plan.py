@@ -58,7 +58,7 @@ def register(sub) -> None:
         default=4,
         help="best distinct swarm layouts scored, with the seeds, on fresh draws (4)",
     )
-    p.add_argument("--finalist-draws", type=int, default=3, help="fresh draws of the finalists (3)")
+    p.add_argument("--finalist-draws", type=int, default=4, help="fresh draws of the finalists (4)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
         "--workers",
