@@ -32,7 +32,7 @@ import time
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from analysis.fim import peb
 from placement.costs import DrawsCost, cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.rangetable import node_draws
+from placement.result import LayoutResult
 from placement.serialization import to_jsonable
 from placement.simselect import SearchOptions
 from placement.surfaces import random_layout
@@ -77,29 +78,49 @@ class SeedLayout:
         }
 
 
-@dataclass
-class PlacementResult:
-    """Result of :func:`seed_then_pso`.
+#: status codes of :class:`PlacementResult`
+PLACEMENT_STATUS = {
+    0: "a layout was planned",
+    1: "no usable layout: every candidate failed or is degenerate",
+}
 
-    anchors (M, 3) the chosen layout; cost its (noisy) PSO cost; history the swarm's best
-    cost per iteration (non-increasing); finalists the best distinct particle layouts with
-    their PSO cost and their re-scored cost (the chosen one has the lowest re-scored cost,
-    see :func:`seed_then_pso`); seeds the seed layouts with their costs; validation the
-    statistics of the chosen layout over ``validate_realizations`` noise
-    realizations (σ, mean, P95, RMS of the Euclidean error in m; mean PEB in m with
-    σ_r = 0.04 m, PEB = √tr J⁻¹); timings in seconds.
+
+def cost_unit(name: str) -> str:
+    """The unit of a cost by name: m² for the variance, m for the other statistics and
+    the mean PEB, "" for a user's callable."""
+    return {"variance": "m²", "mean": "m", "p95": "m", "rms": "m", "peb": "m"}.get(name, "")
+
+
+@dataclass(frozen=True)
+class PlacementResult(LayoutResult):
+    """Result of :func:`seed_then_pso` (the result convention of :mod:`placement.result`).
+
+    anchors (M, 3) the chosen layout (m); cost (``fun``, in ``cost_unit``) its cost on the
+    finalists' fresh draws (a simulated cost), or in the swarm (otherwise); history the
+    swarm's best cost per iteration (non-increasing); finalists the layouts scored on
+    fresh draws (``source``, ``anchors``, swarm cost ``pso_cost``, fresh-draw cost
+    ``cost``; the chosen one has the lowest); seeds the seed layouts with their costs;
+    validation the checks of :func:`placement.validation.validate_layout`; timings the
+    seconds of every phase and ``total``; settings every setting of the run and
+    ``nfev_by_phase``. ``to_dict()`` is the ``result.json`` format and
+    :meth:`from_dict` reads it back.
     """
+
+    FUN: ClassVar[str] = "cost"
+    STATUS: ClassVar[dict[int, str]] = PLACEMENT_STATUS
 
     room: Room
     anchors: np.ndarray
     cost: float
     cost_name: str
+    cost_unit: str
     history: list[float]
     best_anchors_history: list[np.ndarray]
     nfev: int
     nit: int
-    message: str
     success: bool
+    status: int
+    message: str
     seeds: list[SeedLayout]
     validation: dict[str, Any]
     timings: dict[str, float]
@@ -107,33 +128,78 @@ class PlacementResult:
     pso: PSOResult | None = field(default=None, repr=False)
     finalists: list[dict[str, Any]] = field(default_factory=list)
 
-    @property
-    def x(self) -> np.ndarray:
-        return self.anchors.ravel()
-
-    @property
-    def fun(self) -> float:
-        return self.cost
-
     def to_dict(self) -> dict[str, Any]:
         return {
+            "kind": "plan",
             "room": self.room.to_dict(),
             "anchors": self.anchors.tolist(),
             "cost": self.cost,
+            "fun": self.cost,
             "cost_name": self.cost_name,
+            "cost_unit": self.cost_unit,
             "history": list(self.history),
             "best_anchors_history": [np.asarray(a).tolist() for a in self.best_anchors_history],
             "nfev": self.nfev,
             "nit": self.nit,
-            "message": self.message,
             "success": self.success,
+            "status": self.status,
+            "message": self.message,
             "seeds": [s.to_dict() for s in self.seeds],
-            "finalists": self.finalists,
+            "finalists": [
+                {**f, "anchors": np.asarray(f["anchors"]).tolist()} for f in self.finalists
+            ],
             "validation": self.validation,
             "timings": self.timings,
             "settings": self.settings,
             "costs": None if self.pso is None else np.asarray(self.pso.costs).tolist(),
         }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PlacementResult:
+        """The result read back from :meth:`to_dict` (e.g. a ``result.json``; JSON nulls
+        become NaN); the swarm's full record (``pso``) is not kept."""
+
+        def num(v):
+            return math.nan if v is None else float(v)
+
+        seeds = [
+            SeedLayout(
+                s["name"],
+                np.asarray(s["anchors"], dtype=float),
+                num(s["mean_peb"]),
+                num(s.get("cost")),
+                num(s.get("table_cost")),
+            )
+            for s in d.get("seeds", [])
+        ]
+        finalists = [
+            {
+                **f,
+                "anchors": np.asarray(f["anchors"], dtype=float),
+                "pso_cost": num(f.get("pso_cost")),
+                "cost": num(f.get("cost")),
+            }
+            for f in d.get("finalists", [])
+        ]
+        return cls(
+            room=Room.from_dict(d["room"]),
+            anchors=np.asarray(d["anchors"], dtype=float),
+            cost=num(d["cost"]),
+            cost_name=d["cost_name"],
+            cost_unit=d.get("cost_unit", cost_unit(d["cost_name"])),
+            history=[num(h) for h in d.get("history", [])],
+            best_anchors_history=[np.asarray(a) for a in d.get("best_anchors_history", [])],
+            nfev=int(d.get("nfev", 0)),
+            nit=int(d.get("nit", 0)),
+            success=bool(d.get("success", True)),
+            status=int(d.get("status", 0)),
+            message=d.get("message", ""),
+            seeds=seeds,
+            validation=d.get("validation", {}),
+            timings=d.get("timings", {}),
+            settings=d.get("settings", {}),
+            finalists=finalists,
+        )
 
     def to_json(self, **kw) -> str:
         """Strict JSON (non-finite numbers become null)."""
@@ -538,12 +604,14 @@ def seed_then_pso(
         anchors=np.asarray(anchors),
         cost=float(chosen),
         cost_name=run["label"],
+        cost_unit=cost_unit(run["label"]),
         history=res.history,
         best_anchors_history=res.best_anchors_history,
         nfev=res.nfev,
         nit=res.nit,
-        message=message,
         success=success,
+        status=0 if success else 1,
+        message=message,
         seeds=seed_layouts,
         validation=validation,
         timings=clock.timings(),
@@ -764,7 +832,7 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
         usable = [f for f in final if math.isfinite(f["cost"]) and not _degenerate(f["anchors"])]
         if usable:
             best = min(usable, key=lambda f: f["cost"])
-            anchors, chosen = best["anchors"], best["pso_cost"]
+            anchors, chosen = best["anchors"], best["cost"]
         clock.lap("finalists", len(final) * run["finalist_draws"])
     return anchors, chosen, final
 
