@@ -8,9 +8,9 @@ a. Four anchors, corners versus optimized (paper §V-A): σ / mean / P95 of the 
    the paper-settings PSO layout and the ``seed_then_pso`` layout at M = 4; DOP-difference
    maps, error CDFs (Euclidean, |x|, |y|, |z|) and the PSO evolution (PEB at t = 1, mid, end).
 b. Table I (paper §V-B): for each M, paper-settings PSO (``seeds=None``: 15 particles,
-   area-proportional random start, ≤ ``--iterations``, stop on small improvement) and
-   ``seed_then_pso`` (its "auto" seeds; ``--search-starts 0``: analytic seeds only),
-   validated with ``--realizations`` (≥ 100): σ, mean,
+   area-proportional random start, ≤ ``--iterations``, stop on small improvement, on the
+   default cost) and ``seed_then_pso`` with its defaults (or its runs saved by
+   bench_pso.py, ``--stp-from``), validated with ``--realizations`` (≥ 100): σ, mean,
    P95 beside the paper's values; error CDFs and layout views.
 c. Bound-driven versus simulation-driven: for each M, the PEB-optimal layout
    (``relax_select`` A-optimal + ``refine_peb``), the PSO layout and the ``seed_then_pso``
@@ -108,13 +108,14 @@ def validate(room: Room, anchors, realizations: int, seed: int, axis: bool) -> d
     """Simulated statistics of one layout: σ / mean / P95 over all R·P errors, per-node RMSE
     and DOP, range-error statistics, errors (R, P) and optionally signed axis errors."""
     t0 = time.perf_counter()
-    ev = evaluate_layout(room, anchors, realizations=realizations, seed=seed)
+    ev = evaluate_layout(room, anchors, realizations=realizations, rng=seed)
     re = np.asarray(ev.range_errors)  # (R, P, M)
     med = np.median(re)
     robust = 1.4826 * float(np.median(np.abs(re - med)))
     outlier = np.abs(re) > OUTLIER_M
     # precision DOP: spread of the estimates about their own mean (no bias) over σ_r; the
-    # RMS-based DOP (ev.dop, docs/model.md) uses the RMS error, which includes the bias
+    # paper's DOP (ev.dop) uses the standard deviation of the Euclidean error, the
+    # RMS-based one (ev.dop_rms, docs/model.md) the RMS error, which includes the bias
     spread = np.sqrt(np.sum(np.var(np.asarray(ev.estimates), axis=0), axis=-1))
     sr = np.asarray(ev.range_std)
     dop_precision = np.full(sr.shape, np.inf)
@@ -124,6 +125,7 @@ def validate(room: Room, anchors, realizations: int, seed: int, axis: bool) -> d
         "n_unconverged": ev.n_unconverged,
         "rmse": np.asarray(ev.rmse),
         "dop": np.asarray(ev.dop),
+        "dop_rms": np.asarray(ev.dop_rms),
         "dop_precision": dop_precision,
         "range_std": np.asarray(ev.range_std),
         "robust_range_sigma": robust,
@@ -157,7 +159,7 @@ def peb_optimal(room: Room, M: int, seed: int) -> dict:
     from placement.relaxation import relax_select
 
     t0 = time.perf_counter()
-    sel = relax_select(room, M, criterion="A", sigma=SIGMA_R, seed=seed)
+    sel = relax_select(room, M, criterion="A", sigma=SIGMA_R, rng=seed)
     t1 = time.perf_counter()
     ref = refine_peb(room, sel.anchors, sigma=SIGMA_R, return_info=True)
     t2 = time.perf_counter()
@@ -169,13 +171,13 @@ def peb_optimal(room: Room, M: int, seed: int) -> dict:
         "seconds": t2 - t0,
         "relax_seconds": t1 - t0,
         "refine_seconds": t2 - t1,
-        "relax_status": sel.status,
-        "relax_value_m2": sel.value,
-        "relax_lower_bound_m2": sel.lower_bound,
+        "relax_status": sel.message,
+        "relax_value_m2": sel.cost_m2,
+        "relax_lower_bound_m2": sel.lower_bound_m2,
         "relax_gap": sel.gap,
-        "refine_status": ref.status,
-        "mean_peb_relaxed_m": ref.initial_mean_peb,
-        "mean_peb_refined_m": ref.mean_peb,
+        "refine_status": ref.message,
+        "mean_peb_relaxed_m": ref.initial_mean_peb_m,
+        "mean_peb_refined_m": ref.mean_peb_m,
     }
 
 
@@ -185,26 +187,22 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
     ckpt = None
     if ckpt_dir is not None:
         tag = f"p{args.particles}_i{iters}_tol{options.tol:g}_pat{options.patience}"
-        if method == "stp" and args.search_starts != 0:
-            tag += f"_search{args.search_starts}"
         ckpt = ckpt_dir / f"{method}_M{M}_s{seed}_{tag}.json"
     t0 = time.perf_counter()
+    # "pso": the paper's unseeded swarm (on the default cost's common draws); "stp":
+    # seed_then_pso with its defaults
+    swarm = {"seeds": None, "options": options} if method == "pso" else {}
     res = seed_then_pso(
         room,
         M,
-        particles=args.particles,
-        iterations=iters,
         cost="variance",
-        realizations=args.pso_realizations,
-        seeds=None if method == "pso" else "auto",
-        search={"starts": args.search_starts},
-        finalists=args.finalists,
         executor=executor,
-        seed=seed,
+        workers=args.workers,
+        rng=seed,
         progress=False,
         validate_realizations=0,
         checkpoint=ckpt,
-        options=options,
+        **swarm,
     )
     seconds = time.perf_counter() - t0
     p = res.pso
@@ -215,7 +213,7 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
         "anchors": np.asarray(res.anchors).tolist(),
         # wall-clock to obtain the layout: seeding + PSO (a resumed PSO counts the elapsed
         # time stored in its checkpoint)
-        "seconds": res.timings["seeding"] + p.elapsed,
+        "seconds": res.timings["total"] - res.timings.get("validation", 0.0),
         "invocation_seconds": seconds,
         "cost_variance_m2": res.cost,
         "nit": res.nit,
@@ -238,7 +236,7 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
 
 def stp_from_bench_pso(path: Path, args) -> dict:
     """A seed_then_pso layout entry from a run that bench_pso.py saved (same seed, the
-    library's current defaults); seconds = seeding + PSO + re-scoring of the finalists."""
+    library's current defaults); seconds = every phase but the validation."""
     r = json.loads(path.read_text())
     t = r["timings"]
     return {
@@ -246,13 +244,13 @@ def stp_from_bench_pso(path: Path, args) -> dict:
         "M": r["M"],
         "seed": r["seed"],
         "anchors": r["anchors"],
-        "seconds": t["seeding"] + t["pso"] + t.get("finalists", 0.0),
+        "seconds": t["total"] - t.get("validation", 0.0),
         "cost_variance_m2": r["cost"],
         "nit": r["nit"],
         "nfev": r["nfev"],
         "max_iterations": args.iterations_for(r["M"]),
         "particles": args.particles,
-        "message": r["message"],
+        "message": r.get("message", ""),
         "history": r["history"],
         "timings": t,
         "seeds": r["seeds"],
@@ -331,6 +329,8 @@ def section_a(room, L, V, args, rec, out, figs) -> None:
             max=st["max"],
             mean_dop=_mean_dop(v["dop"]),
             median_dop=_median_dop(v["dop"]),
+            mean_dop_rms=_mean_dop(v["dop_rms"]),
+            median_dop_rms=_median_dop(v["dop_rms"]),
             mean_dop_precision=_mean_dop(v["dop_precision"]),
             median_dop_precision=_median_dop(v["dop_precision"]),
             dop_finite_nodes=int(np.isfinite(v["dop"]).sum()),
@@ -525,18 +525,6 @@ def parse_args():
     )
     ap.add_argument("--patience", type=int, default=None, help="default: PSOOptions()")
     ap.add_argument("--pso-realizations", type=int, default=1, help="per cost evaluation")
-    ap.add_argument(
-        "--search-starts",
-        type=int,
-        default=8,
-        help="starts of seed_then_pso's simulation-driven seed search (0: analytic seeds only)",
-    )
-    ap.add_argument(
-        "--finalists",
-        type=int,
-        default=4,
-        help="seed_then_pso's re-scored finalists (1: the swarm's best, as before they existed)",
-    )
     ap.add_argument(
         "--stp-from",
         metavar="DIR",

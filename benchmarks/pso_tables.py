@@ -1,80 +1,138 @@
-"""Markdown table of seeded versus unseeded swarms from the runs bench_pso.py saved.
+"""Markdown tables of the seed_then_pso runs bench_pso.py saved.
 
-Run: python benchmarks/pso_tables.py [DIR]   (default: docs/benchmarks/pso)
+Run: python benchmarks/pso_tables.py [DIR]   (default: docs/benchmarks/plan)
+
+Prints: Table I per M (σ / mean / P95 per seed, median and worst, against the paper);
+held-out nodes and mounting error against the earlier layouts (when bench_pso ran with
+``--baseline``); what the swarm and the refinement add over the best seed; the seconds and
+evaluations of every phase; and, when present, the unseeded swarms.
 """
 
 import json
+import statistics
 import sys
 from pathlib import Path
 
 from _common import PAPER_TABLE1
 
-from placement.pso import nfev_to_reach
+
+def _runs(d: Path, suffix: str = "") -> dict[int, list[dict]]:
+    out: dict[int, list[dict]] = {}
+    for p in sorted(d.glob(f"M*_s*{suffix}.json")):
+        if not suffix and p.stem.endswith("_unseeded"):
+            continue
+        r = json.loads(p.read_text())
+        out.setdefault(r["M"], []).append(r)
+    return {M: sorted(rs, key=lambda r: r["seed"]) for M, rs in sorted(out.items())}
+
+
+def table1(runs: dict[int, list[dict]]) -> None:
+    print("| M | paper σ / mean / P95 (m) | runs: seed σ / mean / P95 (m) | median σ / P95 "
+          "| worst σ / P95 | spread of σ / median | below the paper (σ and P95) |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    for M, rs in runs.items():
+        p = PAPER_TABLE1.get(M, {})
+        v = [r["validation"] for r in rs]
+        s, q = [x["std"] for x in v], [x["p95"] for x in v]
+        cells = "; ".join(
+            f"{r['seed']}: {x['std']:.3f} / {x['mean']:.3f} / {x['p95']:.3f}"
+            for r, x in zip(rs, v, strict=True)
+        )
+        below = sum(x["std"] < p.get("std", 0) and x["p95"] < p.get("p95", 0) for x in v)
+        med = statistics.median(s)
+        paper = f"{p['std']:.3f} / {p['mean']:.3f} / {p['p95']:.3f}" if p else "—"
+        print(
+            f"| {M} | {paper} | {cells} | {med:.3f} / {statistics.median(q):.3f} "
+            f"| {max(s):.3f} / {max(q):.3f} | {(max(s) - min(s)) / med:.1%} "
+            f"| {below} of {len(rs)} |"
+        )
+
+
+def robustness(runs: dict[int, list[dict]]) -> None:
+    print(
+        "\n| M | seed | σ at the 270 nodes | held-out grid σ / P95 | random points σ / P95 "
+        "| mounting error σ / P95 | earlier layout: 270 / held-out grid / mounting σ |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for M, rs in runs.items():
+        for r in rs:
+            v = r["validation"]
+            h, m = v["held_out"], v["mounting"]
+            b = r.get("baseline")
+            base = "—"
+            if b:
+                base = (f"{b['std']:.3f} / {b['held_out']['grid']['std']:.3f} / "
+                        f"{b['mounting']['std']:.3f}")  # fmt: skip
+            print(
+                f"| {M} | {r['seed']} | {v['std']:.3f} "
+                f"| {h['grid']['std']:.3f} / {h['grid']['p95']:.3f} "
+                f"| {h['random']['std']:.3f} / {h['random']['p95']:.3f} "
+                f"| {m['std']:.3f} / {m['p95']:.3f} | {base} |"
+            )
+
+
+def stages(runs: dict[int, list[dict]]) -> None:
+    print("\n| M | seed | chosen | σ chosen / best seed (m) | held-out σ chosen / best seed "
+          "| mounting σ chosen / best seed | swarm's best cost below its seeds' |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    for M, rs in runs.items():
+        for r in rs:
+            v, b = r["validation"], r.get("best_seed")
+            if not b:
+                continue
+            first = min(s["cost"] for s in r["seeds"])
+            print(
+                f"| {M} | {r['seed']} | {r['chosen']} | {v['std']:.3f} / {b['std']:.3f} "
+                f"| {v['held_out']['grid']['std']:.3f} / {b['held_out']['grid']['std']:.3f} "
+                f"| {v['mounting']['std']:.3f} / {b['mounting']['std']:.3f} "
+                f"| {'yes' if r['history'][-1] < first else 'no'} |"
+            )
+
+
+def phases(runs: dict[int, list[dict]]) -> None:
+    print("\n| M | seed | total s | search s (table layouts) | swarm s (simulations) "
+          "| refinement s (table layouts) | finalists s | validation s |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|")
+    for M, rs in runs.items():
+        for r in rs:
+            t, n = r["timings"], r["nfev_by_phase"]
+            print(
+                f"| {M} | {r['seed']} | {t['total']:.0f} | {t.get('search', 0):.0f} "
+                f"({n.get('search', 0)}) | {t.get('pso', 0):.0f} ({n.get('pso', 0)}) "
+                f"| {t.get('refinement', 0):.0f} ({n.get('refinement', 0)}) "
+                f"| {t.get('finalists', 0):.0f} | {t.get('validation', 0):.0f} |"
+            )
+
+
+def unseeded(seeded: dict[int, list[dict]], runs: dict[int, list[dict]]) -> None:
+    if not runs:
+        return
+    print("\n| M | seed | unseeded (15 × 40): σ / P95, s | seeded (default): σ / P95, s |")
+    print("|---|---|---|---|")
+    for M, rs in runs.items():
+        by_seed = {r["seed"]: r for r in seeded.get(M, [])}
+        for u in rs:
+            s = by_seed.get(u["seed"])
+            uv = u["validation"]
+            cell = "—"
+            if s:
+                cell = (f"{s['validation']['std']:.3f} / {s['validation']['p95']:.3f}, "
+                        f"{s['timings']['total']:.0f}")  # fmt: skip
+            print(
+                f"| {M} | {u['seed']} | {uv['std']:.3f} / {uv['p95']:.3f}, "
+                f"{u['timings']['total']:.0f} | {cell} |"
+            )
 
 
 def main(folder: str) -> None:
     d = Path(folder)
-    print(
-        "| M | seed | unseeded: final cost (m²), reach / nfev, σ / P95 (m), s "
-        "| seeded: first cost, reach, ratio, nfev, σ / P95 (m), s (seed search s) "
-        "| seed search: table eq. evaluations, positioning-only layouts "
-        "| ratio counting the seeding's wall time as evaluations "
-        "| chosen finalist (unseeded, seeded) |"
-    )
-    print("|---|---|---|---|---|---|---|")
-    for up in sorted(d.glob("M*_s*_unseeded.json"), key=lambda p: p.name):
-        sp = up.with_name(up.name.replace("unseeded", "seeded"))
-        if not sp.exists():
-            continue
-        u, s = json.loads(up.read_text()), json.loads(sp.read_text())
-        t = u["history"][-1]  # the unseeded swarm's final best cost
-        base, need = nfev_to_reach(u["costs"], t), nfev_to_reach(s["costs"], t)
-        ratio = "never" if need is None else f"{need / base:.4f}"
-        uv, sv, ss = u["validation"], s["validation"], s["seed_search"]
-        # the seeding's wall time in evaluations at this run's own seconds per evaluation
-        seeding = s["timings"]["seeding"] / (s["timings"]["pso"] / s["nfev"])
-        ratio_all = "never" if need is None else f"{(seeding + need) / base:.2f}"
-        print(
-            f"| {u['M']} | {u['seed']} "
-            f"| {t:.4f}, {base} / {u['nfev']}, {uv['std']:.3f} / {uv['p95']:.3f}, "
-            f"{u['seconds']:.0f} "
-            f"| {s['costs'][0][0]:.4f}, {need if need else '—'}, {ratio}, {s['nfev']}, "
-            f"{sv['std']:.3f} / {sv['p95']:.3f}, {s['seconds']:.0f} "
-            f"({s['timings']['seeding']:.0f}) "
-            f"| {ss['equivalent_evaluations']:.1f}, {ss['nfev']} "
-            f"| {ratio_all} ({seeding:.0f} + {need or '—'}) / {base} "
-            f"| {chosen(u)}, {chosen(s)} |"
-        )
-
-    print("\nseed_then_pso (seeded runs) against the paper's Table I, validated over R = 100:\n")
-    print("| M | paper σ / mean / P95 (m) | runs: seed σ / mean / P95 (m) | σ and P95 below |")
-    print("|---|---|---|---|")
-    for M, paper in PAPER_TABLE1.items():
-        runs = sorted(
-            (json.loads(p.read_text()) for p in d.glob(f"M{M}_s*_seeded.json")),
-            key=lambda r: r["seed"],
-        )
-        if not runs:
-            continue
-        cells, below = [], 0
-        for r in runs:
-            v = r["validation"]
-            cells.append(f"{r['seed']}: {v['std']:.3f} / {v['mean']:.3f} / {v['p95']:.3f}")
-            below += v["std"] < paper["std"] and v["p95"] < paper["p95"]
-        print(
-            f"| {M} | {paper['std']:.3f} / {paper['mean']:.3f} / {paper['p95']:.3f} "
-            f"| {'; '.join(cells)} | {below} of {len(runs)} |"
-        )
-
-
-def chosen(run: dict) -> str:
-    """Which finalist (by PSO cost, 1 = the swarm's best) had the lowest re-scored cost."""
-    f = run.get("finalists") or []
-    if not f:
-        return "—"
-    k = min(range(len(f)), key=lambda i: f[i]["cost"])
-    return f"{k + 1} of {len(f)}"
+    runs = _runs(d)
+    table1(runs)
+    robustness(runs)
+    stages(runs)
+    phases(runs)
+    unseeded(runs, _runs(d, "_unseeded"))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "docs/benchmarks/pso")
+    main(sys.argv[1] if len(sys.argv) > 1 else "docs/benchmarks/plan")

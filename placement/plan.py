@@ -338,25 +338,12 @@ def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes
 def build_table(
     room: Room, options: SearchOptions, nodes, rng, executor=None, progress: bool = False
 ):
-    """The range table of a run: every (deduplicated) candidate point of
-    ``candidate_grid(room, options.spacing)`` on the run's draws."""
-    from placement.rangetable import range_table
-    from placement.simselect import new_points
-    from placement.surfaces import candidate_grid
+    """The range table of a run (:func:`placement.simselect.search_table`), with a
+    progress bar."""
+    from placement.simselect import search_table
 
     bar = _Bar(progress, "range table")
-    table = range_table(
-        room,
-        new_points(np.empty((0, 3)), candidate_grid(room, options.spacing)),
-        nodes,
-        draws=options.draws,
-        exact_draws=options.exact_draws,
-        mount_tolerance=options.mount_tolerance,
-        rng=rng,
-        executor=executor,
-        precision=options.precision,
-        progress=bar.update,
-    )
+    table = search_table(room, options, nodes, rng, executor, bar.update)
     bar.close()
     return table
 

@@ -353,6 +353,27 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     return found
 
 
+def search_table(
+    room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None
+) -> RangeTable:
+    """The range table of a search: every distinct point of
+    ``candidate_grid(room, options.spacing)`` on ``options.draws`` scene draws of ``nodes``
+    (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
+    cand = new_points(np.empty((0, 3)), candidate_grid(room, options.spacing))
+    return range_table(
+        room,
+        cand,
+        nodes,
+        draws=options.draws,
+        exact_draws=options.exact_draws,
+        mount_tolerance=options.mount_tolerance,
+        rng=rng,
+        executor=executor,
+        precision=options.precision,
+        progress=progress,
+    )
+
+
 def simulated_select(
     room: Room,
     M: int,
@@ -383,20 +404,7 @@ def simulated_select(
     seed = checks.entropy("rng", rng)
     t0 = time.perf_counter()
     if table is None:
-        cand = new_points(np.empty((0, 3)), candidate_grid(room, opt.spacing))
-        if len(cand) < M:
-            raise ValueError(f"candidates: need at least M = {M} points, got {len(cand)}")
-        table = range_table(
-            room,
-            cand,
-            nodes,
-            draws=opt.draws,
-            exact_draws=opt.exact_draws,
-            mount_tolerance=opt.mount_tolerance,
-            rng=seed,
-            executor=executor,
-            precision=opt.precision,
-        )
+        table = search_table(room, opt, nodes, seed, executor)
     if len(table.candidates) < M:
         raise ValueError(f"candidates: need at least M = {M} points, got {len(table.candidates)}")
     t1 = time.perf_counter()

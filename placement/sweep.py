@@ -120,8 +120,7 @@ def sweep(
     progress : an optional callable ``progress(M, row)`` called after each M.
     """
     from placement.plan import _search_options, seed_then_pso
-    from placement.rangetable import range_table
-    from placement.simselect import new_points
+    from placement.simselect import new_points, search_table
     from placement.surfaces import candidate_grid
 
     room = as_room(room)
@@ -139,23 +138,13 @@ def sweep(
         kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
         and kw.get("seeds", "auto") == "auto"
     ):
-        cand = new_points(np.empty((0, 3)), candidate_grid(room, search.spacing))
-        if len(cand) < max(counts):
+        n = len(new_points(np.empty((0, 3)), candidate_grid(room, search.spacing)))
+        if n < max(counts):
             raise ValueError(
-                f"anchors: {max(counts)} anchors exceed the {len(cand)} candidate points "
+                f"anchors: {max(counts)} anchors exceed the {n} candidate points "
                 f"(spacing {search.spacing:g} m) of this room"
             )
-        table = range_table(
-            room,
-            cand,
-            kw.get("nodes"),
-            draws=search.draws,
-            exact_draws=search.exact_draws,
-            mount_tolerance=search.mount_tolerance,
-            rng=entropy,
-            executor=kw.get("executor"),
-            precision=search.precision,
-        )
+        table = search_table(room, search, kw.get("nodes"), entropy, kw.get("executor"))
     t_table = time.perf_counter() - t0
     rows = []
     for M in counts:
