@@ -178,33 +178,17 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
 
 
 def _simulate(room, candidates, first_id: int, nodes, spec, executor, chunk, progress=None):
+    from placement.workers import run_jobs
+
     ids = np.arange(first_id, first_id + len(candidates))
     args = [
         (room, candidates[i : i + chunk], ids[i : i + chunk], nodes, spec)
         for i in range(0, len(candidates), chunk)
     ]
-    if executor is None:
-        pending = [_Now(_columns, a) for a in args]
-    else:
-        pending = [executor.submit(_columns, *a) for a in args]
-    parts = []
-    for k, fut in enumerate(pending):
-        parts.append(fut.result())
-        if progress:
-            progress(k + 1, len(pending))
+    parts = run_jobs(executor, _columns, args, progress=progress)
     return np.concatenate([p[0] for p in parts], axis=2), np.concatenate(
         [p[1] for p in parts], axis=2
     )
-
-
-class _Now:
-    """A future-like wrapper that runs ``fn(*args)`` when its result is asked for."""
-
-    def __init__(self, fn, args):
-        self.fn, self.args = fn, args
-
-    def result(self):
-        return self.fn(*self.args)
 
 
 def range_table(

@@ -308,9 +308,9 @@ def _descents(table, statistic, nbr, layouts, seed, key):
 
 
 def _map(executor, fn, jobs):
-    if executor is None:
-        return [fn(*job) for job in jobs]
-    return [f.result() for f in [executor.submit(fn, *job) for job in jobs]]
+    from placement.workers import run_jobs
+
+    return run_jobs(executor, fn, jobs)
 
 
 def _split(items: list, parts: int) -> list[list]:

@@ -263,3 +263,32 @@ class WorkerPool(Executor):
 
     def __repr__(self) -> str:
         return f"WorkerPool(max_workers={self._max_workers})"
+
+
+def run_jobs(executor, fn, jobs, *, retries: int = 2, progress=None) -> list:
+    """``[fn(*job) for job in jobs]``, on ``executor`` when given (all submitted at once);
+    a job whose worker died (:class:`WorkerLost`) is submitted again, at most ``retries``
+    times, so a deterministic job costs time, not the run. ``progress(done, total)`` as
+    jobs finish (in order)."""
+    jobs = list(jobs)
+    if executor is None:
+        out = []
+        for job in jobs:
+            out.append(fn(*job))
+            if progress:
+                progress(len(out), len(jobs))
+        return out
+    futures = [executor.submit(fn, *job) for job in jobs]
+    out = []
+    for job, fut in zip(jobs, futures, strict=True):
+        for attempt in range(retries + 1):
+            try:
+                out.append(fut.result())
+                break
+            except WorkerLost:
+                if attempt == retries:
+                    raise
+                fut = executor.submit(fn, *job)
+        if progress:
+            progress(len(out), len(jobs))
+    return out
