@@ -486,3 +486,26 @@ def test_report_lists_keepouts_and_zones(tmp_path):
         assert name in rep.html
     assert f"The {len(room.grid())} evaluation nodes" in rep.html
     assert "Keep-outs (hatched) and tag zones (dashed)" in rep.html
+
+
+@settings(max_examples=4, deadline=None)
+@given(rooms_with_keepouts(), st.integers(0, 2**16))
+def test_a_short_seed_then_pso_never_returns_a_point_in_a_keepout(room, seed):
+    from placement.simselect import SearchOptions
+    from placement.validation import ValidationOptions
+
+    search = SearchOptions(
+        spacing=1.0, chains=1, evaluations=20, random_starts=3, neighbours=6, batch=3,
+        patience=2, fine_spacings=(0.5,),
+    )  # fmt: skip
+    try:
+        res = placement.seed_then_pso(
+            room, 4, search=search, particles=3, iterations=2, rng=seed, progress=False,
+            nodes=room.grid((3, 3, 2)), validation=ValidationOptions(realizations=0),
+        )  # fmt: skip
+    except ValueError as exc:  # too few candidate points for 4 anchors in this room
+        assert "candidate" in str(exc) or "anchors" in str(exc)
+        return
+    layouts = [res.anchors] + [s.anchors for s in res.seeds] + [f["anchors"] for f in res.finalists]
+    for a in layouts:
+        assert_allowed(room, a)

@@ -138,3 +138,12 @@ def test_validation_checks_are_reproducible_and_independent_of_the_executor():
     assert v1["mounting"]["n"] == 2 * len(NODES)
     v3 = validate_layout(ROOM, a, rng=4, options=QUICK, nodes=NODES)
     assert v3["std"] != v1["std"]
+
+
+def test_progress_bars_can_be_switched_off(capsys):
+    _plan(progress=False)
+    assert capsys.readouterr().err == ""
+    _plan(progress=True)
+    err = capsys.readouterr().err
+    for phase in ("range table", "search", "PSO", "finalists", "validation"):
+        assert phase in err
