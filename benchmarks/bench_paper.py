@@ -554,18 +554,7 @@ def parse_args():
     return args
 
 
-def main() -> None:
-    args = parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    ckpt_dir = Path(args.checkpoint_dir) if args.checkpoint_dir else None
-    if ckpt_dir is not None:
-        ckpt_dir.mkdir(parents=True, exist_ok=True)
-    rec = Recorder(out / "results.jsonl", append=args.resume)
-    figs = None if args.no_figures else figures_module()
-    room = Room.techtile()
-    sections = set(args.sections)
-    t_start = time.perf_counter()
+def _record_run(args, rec) -> None:
     rec(
         "bench_paper_run",
         argv={k: v for k, v in vars(args).items() if not callable(v)}
@@ -579,6 +568,99 @@ def main() -> None:
         started_utc=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
     )
 
+
+def _stp_runs(args, store) -> None:
+    """seed_then_pso layouts from bench_pso.py's saved runs (``--stp-from``)."""
+    for M in args.anchors:
+        for s in args.seeds:
+            for name in (f"M{M}_s{s}.json", f"M{M}_s{s}_seeded.json"):
+                path = Path(args.stp_from) / name
+                if path.exists():
+                    store(key("stp", M, s), stp_from_bench_pso(path, args))
+                    break
+
+
+def _layouts(room, args, sections, L, store, rec, executor, ckpt_dir) -> None:
+    """Every layout the sections need: corners, PEB-optimal, paper-PSO, seed_then_pso."""
+    store(
+        "corners", {"method": "corners", "M": 4, "anchors": room.corners_layout(), "seconds": 0.0}
+    )
+    for M in args.anchors:
+        for s in args.seeds:
+            if "c" in sections and key("peb", M, s) not in L:
+                store(key("peb", M, s), peb_optimal(room, M, s))
+            if not sections & set("abcd"):
+                continue
+            for method in ("pso", "stp"):
+                k = key(method, M, s)
+                if k in L:
+                    continue
+                entry = run_pso(room, M, s, method, args, executor, ckpt_dir)
+                store(k, entry)
+                rec("layout", key=k, **{kk: vv for kk, vv in entry.items()
+                                        if kk != "best_anchors_history"})  # fmt: skip
+
+
+def _validation_jobs(args, sections) -> dict[str, tuple[int, bool]]:
+    """Which layouts to validate: key -> (realizations, keep axis errors)."""
+    jobs: dict[str, tuple[int, bool]] = {}
+    if "a" in sections:
+        s = args.seeds[0]
+        for k in ("corners", key("pso", 4, s), key("stp", 4, s)):
+            jobs[k] = (args.corner_realizations, True)
+    methods = (("pso", "stp") if sections & set("bc") else ()) + (
+        ("peb",) if "c" in sections else ()
+    )
+    for M in args.anchors:
+        for s in args.seeds:
+            for method in methods:
+                jobs.setdefault(key(method, M, s), (args.realizations, False))
+    return jobs
+
+
+def _validations(room, args, sections, L, rec, executor) -> dict[str, dict]:
+    jobs = _validation_jobs(args, sections)
+    # biggest first for load balance: cost ~ R · M
+    order = sorted(jobs, key=lambda k: -jobs[k][0] * len(L[k]["anchors"]))
+    t0 = time.perf_counter()
+    run = [(room, L[k]["anchors"], jobs[k][0], args.validation_seed, jobs[k][1]) for k in order]
+    from placement.workers import run_jobs
+
+    results = dict(zip(order, run_jobs(executor, validate, run), strict=True))
+    V = {}
+    for k, v in results.items():
+        v["realizations"] = jobs[k][0]
+        V[k] = v
+        rec(
+            "validation",
+            key=k,
+            realizations=jobs[k][0],
+            seed=args.validation_seed,
+            **v["stats"],
+            mean_dop=_mean_dop(v["dop"]),
+            mean_dop_rms=_mean_dop(v["dop_rms"]),
+            robust_range_sigma=v["robust_range_sigma"],
+            outlier_range_fraction=v["outlier_range_fraction"],
+            n_unconverged=v["n_unconverged"],
+            seconds=v["seconds"],
+        )
+    rec("validations_done", layouts=len(jobs), wall_seconds=time.perf_counter() - t0)
+    return V
+
+
+def main() -> None:
+    args = parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    ckpt_dir = Path(args.checkpoint_dir) if args.checkpoint_dir else None
+    if ckpt_dir is not None:
+        ckpt_dir.mkdir(parents=True, exist_ok=True)
+    rec = Recorder(out / "results.jsonl", append=args.resume)
+    figs = None if args.no_figures else figures_module()
+    room = Room.techtile()
+    sections = set(args.sections)
+    t_start = time.perf_counter()
+    _record_run(args, rec)
     layouts_path = out / "layouts.json"
     L: dict[str, dict] = {}
     if args.resume and layouts_path.exists():
@@ -589,98 +671,16 @@ def main() -> None:
         layouts_path.write_text(json.dumps(L, indent=1))
 
     if args.stp_from:
-        for M in args.anchors:
-            for s in args.seeds:
-                path = Path(args.stp_from) / f"M{M}_s{s}_seeded.json"
-                if path.exists():
-                    store(key("stp", M, s), stp_from_bench_pso(path, args))
-
+        _stp_runs(args, store)
     executor = ProcessPoolExecutor(args.workers) if args.workers > 1 else None
     try:
         if "d" in sections:
             section_speed(room, args, executor, rec)
-        store(
-            "corners",
-            {"method": "corners", "M": 4, "anchors": room.corners_layout(), "seconds": 0.0},
-        )
-        need_pso = sections & set("abcd")
-        for M in args.anchors:
-            for s in args.seeds:
-                if "c" in sections and key("peb", M, s) not in L:
-                    store(key("peb", M, s), peb_optimal(room, M, s))
-                if not need_pso:
-                    continue
-                for method in ("pso", "stp"):
-                    k = key(method, M, s)
-                    if k in L:
-                        continue
-                    entry = run_pso(room, M, s, method, args, executor, ckpt_dir)
-                    store(k, entry)
-                    rec(
-                        "layout",
-                        key=k,
-                        **{
-                            kk: vv
-                            for kk, vv in entry.items()
-                            if kk not in ("best_anchors_history",)
-                        },
-                    )
-
-        # validations: which layouts, how many realizations, whether axis errors are kept
-        jobs: dict[str, tuple[int, bool]] = {}
-        if "a" in sections:
-            s = args.seeds[0]
-            for k in ("corners", key("pso", 4, s), key("stp", 4, s)):
-                jobs[k] = (args.corner_realizations, True)
-        for M in args.anchors:
-            for s in args.seeds:
-                methods = (("pso", "stp") if sections & set("bc") else ()) + (
-                    ("peb",) if "c" in sections else ()
-                )
-                for method in methods:
-                    k = key(method, M, s)
-                    if k not in jobs:
-                        jobs[k] = (args.realizations, False)
-        # biggest first for load balance: cost ~ R · M
-        order = sorted(jobs, key=lambda k: -jobs[k][0] * len(L[k]["anchors"]))
-        t0 = time.perf_counter()
-        if executor is None:
-            results = {
-                k: validate(room, L[k]["anchors"], jobs[k][0], args.validation_seed, jobs[k][1])
-                for k in order
-            }
-        else:
-            futs = {
-                k: executor.submit(
-                    validate, room, L[k]["anchors"], jobs[k][0], args.validation_seed, jobs[k][1]
-                )
-                for k in order
-            }
-            results = {k: f.result() for k, f in futs.items()}
-        V = {}
-        for k, v in results.items():
-            v["realizations"] = jobs[k][0]
-            V[k] = v
-            rec(
-                "validation",
-                key=k,
-                realizations=jobs[k][0],
-                seed=args.validation_seed,
-                **v["stats"],
-                mean_dop=_mean_dop(v["dop"]),
-                robust_range_sigma=v["robust_range_sigma"],
-                outlier_range_fraction=v["outlier_range_fraction"],
-                n_unconverged=v["n_unconverged"],
-                seconds=v["seconds"],
-            )
-        rec("validations_done", layouts=len(jobs), wall_seconds=time.perf_counter() - t0)
-
-        if "a" in sections:
-            section_a(room, L, V, args, rec, out, figs)
-        if "b" in sections:
-            section_b(room, L, V, args, rec, out, figs)
-        if "c" in sections:
-            section_c(room, L, V, args, rec, out, figs)
+        _layouts(room, args, sections, L, store, rec, executor, ckpt_dir)
+        V = _validations(room, args, sections, L, rec, executor)
+        for name, section in (("a", section_a), ("b", section_b), ("c", section_c)):
+            if name in sections:
+                section(room, L, V, args, rec, out, figs)
         if "d" in sections:
             section_d_runs(L, args, rec)
     finally:

@@ -655,6 +655,49 @@ def pso(
     that and :class:`ExecutorBroken` is raised, the checkpoint holding the last iteration.
     """
     room = as_room(room)
+    args = _check_args(
+        room, M, cost, options, initial, executor, chunksize, rng, seed, progress, callback,
+        cost_label, eval_timeout, checkpoint,
+    )  # fmt: skip
+    swarm, resumed_from = _resume(args["ckpt"], args["fingerprint"])
+    t0 = time.perf_counter()
+    if swarm is None:
+        swarm = _start(room, args)
+    elapsed0 = swarm.elapsed
+
+    def elapsed() -> float:
+        return elapsed0 + time.perf_counter() - t0
+
+    T = args["options"].iterations
+    message = swarm.stopped or f"reached the maximum number of iterations ({T})"
+    bar = _progress_bar(args["progress"], T, swarm.iteration + 1)
+    try:
+        while swarm.stopped is None and swarm.iteration + 1 < T:
+            _iterate(room, swarm, args, elapsed, resumed_from, bar)
+            message = swarm.stopped or message
+    except ExecutorBroken as exc:
+        ckpt = args["ckpt"]
+        where = (
+            f"checkpoint {ckpt} holds iteration {swarm.iteration}: rerun to resume"
+            if ckpt is not None
+            else "pass a checkpoint to be able to resume"
+        )
+        raise ExecutorBroken(f"{exc}; {where}") from None
+    finally:
+        if bar is not None:
+            bar.close()
+    success = math.isfinite(swarm.gcost)
+    if not success:
+        message = "no particle could be evaluated (every cost was inf); " + message
+    return swarm.result(message, success, elapsed(), resumed_from)
+
+
+def _check_args(
+    room, M, cost, options, initial, executor, chunksize, rng, seed, progress, callback,
+    cost_label, eval_timeout, checkpoint,
+) -> dict[str, Any]:  # fmt: skip
+    """Every argument of :func:`pso` checked; returns them resolved (and the fingerprint
+    of the run, which a checkpoint must match)."""
     if options is not None and not isinstance(options, PSOOptions):
         raise ValueError(
             f"options: must be a PSOOptions (e.g. PSOOptions(**options)) or None, "
@@ -677,6 +720,26 @@ def pso(
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
     if cost_label is not None and not isinstance(cost_label, str):
         raise ValueError(f"cost_label: must be a string or None, got {checks.describe(cost_label)}")
+    eval_timeout = _check_timeout(eval_timeout, executor)
+    initial = _check_initial(initial, M, options.particles)
+    label = cost_label or getattr(cost, "statistic", None) or type(cost).__name__
+    return {
+        "M": M,
+        "cost": cost,
+        "options": options,
+        "initial": initial,
+        "executor": executor,
+        "chunksize": chunksize,
+        "seed": seed,
+        "progress": progress,
+        "callback": callback,
+        "eval_timeout": eval_timeout,
+        "fingerprint": _fingerprint(room, M, options, str(label), seed, initial),
+        "ckpt": None if checkpoint is None else checks.output_path("checkpoint", checkpoint),
+    }
+
+
+def _check_timeout(eval_timeout, executor) -> float | None:
     if eval_timeout is None:
         eval_timeout = _EVAL_TIMEOUT.get()
     if eval_timeout is not None:
@@ -686,88 +749,67 @@ def pso(
                 "eval_timeout: without an executor it needs the main thread (SIGALRM); "
                 "pass executor=placement.WorkerPool(...)"
             )
-    K, T = int(options.particles), int(options.iterations)
-    if initial is not None:
-        initial = checks.reals("initial", initial)
-        if initial.size % (3 * M) or initial.shape[-1] != 3 or initial.ndim not in (2, 3):
-            raise ValueError(
-                f"initial: expected seed layouts of shape (S, {M}, 3), got {initial.shape}"
-            )
-        initial = initial.reshape(-1, M, 3)
-        if len(initial) > K:
-            raise ValueError(f"initial: {len(initial)} seed layouts exceed particles = {K}")
-    label = cost_label or getattr(cost, "statistic", None) or type(cost).__name__
-    fingerprint = _fingerprint(room, M, options, str(label), seed, initial)
-    ckpt = None
-    if checkpoint is not None:
-        ckpt = checks.output_path("checkpoint", checkpoint)
+    return eval_timeout
 
-    swarm, resumed_from = _resume(ckpt, fingerprint)
-    t0 = time.perf_counter()
-    if swarm is None:
-        entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
-        init_rng = _stream(entropy, 2)
-        x = initial_positions(room, M, initial, options, init_rng)
-        v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * np.array(room.size)
-        counts = {"lost": 0, "timeouts": 0}
-        costs, failures = evaluate_swarm(
-            cost, x, entropy, 0, executor, chunksize, eval_timeout=eval_timeout, counts=counts
+
+def _check_initial(initial, M: int, K: int) -> np.ndarray | None:
+    if initial is None:
+        return None
+    initial = checks.reals("initial", initial)
+    if initial.size % (3 * M) or initial.shape[-1] != 3 or initial.ndim not in (2, 3):
+        raise ValueError(
+            f"initial: expected seed layouts of shape (S, {M}, 3), got {initial.shape}"
         )
-        swarm = _Swarm.start(entropy, x, v, costs, failures, counts)
-        if ckpt is not None:
-            _write_atomic(ckpt, swarm.to_state(fingerprint))
-    elapsed0 = swarm.elapsed
-    vmax = options.velocity_clamp * np.array(room.size)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
+    initial = initial.reshape(-1, M, 3)
+    if len(initial) > K:
+        raise ValueError(f"initial: {len(initial)} seed layouts exceed particles = {K}")
+    return initial
 
-        bar = tqdm(total=T, initial=swarm.iteration + 1, desc="PSO", unit="it", leave=False)
 
-    def elapsed() -> float:
-        return elapsed0 + time.perf_counter() - t0
+def _start(room: Room, args: dict) -> _Swarm:
+    """The first iteration: positions, velocities and their costs (checkpointed)."""
+    seed, options = args["seed"], args["options"]
+    entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
+    init_rng = _stream(entropy, 2)
+    x = initial_positions(room, args["M"], args["initial"], options, init_rng)
+    v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * np.array(room.size)
+    counts = {"lost": 0, "timeouts": 0}
+    costs, failures = evaluate_swarm(
+        args["cost"], x, entropy, 0, args["executor"], args["chunksize"],
+        eval_timeout=args["eval_timeout"], counts=counts,
+    )  # fmt: skip
+    swarm = _Swarm.start(entropy, x, v, costs, failures, counts)
+    if args["ckpt"] is not None:
+        _write_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]))
+    return swarm
 
-    message = swarm.stopped or f"reached the maximum number of iterations ({T})"
-    try:
-        while swarm.stopped is None and swarm.iteration + 1 < T:
-            swarm.move(room, options, vmax)
-            costs, failures = evaluate_swarm(
-                cost,
-                swarm.x,
-                swarm.seed,
-                swarm.iteration + 1,
-                executor,
-                chunksize,
-                eval_timeout=eval_timeout,
-                counts=swarm.counts,
-            )
-            swarm.record(costs, failures, options)
-            swarm.elapsed = elapsed()
-            if callback is not None and callback(
-                swarm.result("running", True, elapsed(), resumed_from)
-            ):
-                swarm.stopped = "stopped by callback"
-            if ckpt is not None:
-                _write_atomic(ckpt, swarm.to_state(fingerprint))
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(best=f"{swarm.gcost:.4g}")
-            if swarm.stopped:
-                message = swarm.stopped
-    except ExecutorBroken as exc:
-        where = (
-            f"checkpoint {ckpt} holds iteration {swarm.iteration}: rerun to resume"
-            if ckpt is not None
-            else "pass a checkpoint to be able to resume"
-        )
-        raise ExecutorBroken(f"{exc}; {where}") from None
-    finally:
-        if bar is not None:
-            bar.close()
-    success = math.isfinite(swarm.gcost)
-    if not success:
-        message = "no particle could be evaluated (every cost was inf); " + message
-    return swarm.result(message, success, elapsed(), resumed_from)
+
+def _progress_bar(progress: bool, total: int, initial: int):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, initial=initial, desc="PSO", unit="it", leave=False)
+
+
+def _iterate(room: Room, swarm: _Swarm, args: dict, elapsed, resumed_from, bar) -> None:
+    """One iteration: move, evaluate, record, call back, checkpoint, report progress."""
+    options = args["options"]
+    swarm.move(room, options, options.velocity_clamp * np.array(room.size))
+    costs, failures = evaluate_swarm(
+        args["cost"], swarm.x, swarm.seed, swarm.iteration + 1, args["executor"],
+        args["chunksize"], eval_timeout=args["eval_timeout"], counts=swarm.counts,
+    )  # fmt: skip
+    swarm.record(costs, failures, options)
+    swarm.elapsed = elapsed()
+    callback = args["callback"]
+    if callback is not None and callback(swarm.result("running", True, elapsed(), resumed_from)):
+        swarm.stopped = "stopped by callback"
+    if args["ckpt"] is not None:
+        _write_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]))
+    if bar is not None:
+        bar.update(1)
+        bar.set_postfix(best=f"{swarm.gcost:.4g}")
 
 
 def _resume(ckpt: Path | None, fingerprint: str) -> tuple[_Swarm | None, int | None]:
