@@ -32,10 +32,11 @@ from concurrent.futures import Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
+from placement.result import LayoutResult
 from placement.surfaces import project, random_layout
 from placement.workers import WorkerPool
 from simulation import checks
@@ -124,15 +125,28 @@ class PSOOptions:
         checks.real("init_spread", self.init_spread, low=0.0, unit="m")
 
 
-@dataclass
-class PSOResult:
-    """Outcome of :func:`pso`, in the manner of ``scipy.optimize.OptimizeResult``.
+#: status codes of :class:`PSOResult`
+PSO_STATUS = {
+    0: "reached the maximum number of iterations",
+    1: "the best cost stopped improving (tol, patience)",
+    2: "stopped by the callback",
+    3: "no particle could be evaluated",
+}
 
-    anchors (M, 3) best layout, cost its cost; history[t] the best cost after iteration t
-    (non-increasing); best_anchors_history[t] the best layout then; costs (T, K) every
-    evaluated cost in evaluation order; nfev evaluations; nit iterations; pbest (K, M, 3)
-    each particle's best layout and pcost (K,) its cost.
+
+@dataclass(frozen=True)
+class PSOResult(LayoutResult):
+    """Outcome of :func:`pso` (the result convention of :mod:`placement.result`).
+
+    anchors (M, 3) best layout, cost (``fun``) its cost in the cost's unit; history[t] the
+    best cost after iteration t (non-increasing); best_anchors_history[t] the best layout
+    then; costs (T, K) every evaluated cost in evaluation order; nfev evaluations; nit
+    iterations; status a code of :data:`PSO_STATUS`; pbest (K, M, 3) each particle's
+    best layout and pcost (K,) its cost.
     """
+
+    FUN: ClassVar[str] = "cost"
+    STATUS: ClassVar[dict[int, str]] = PSO_STATUS
 
     anchors: np.ndarray
     cost: float
@@ -140,6 +154,7 @@ class PSOResult:
     nfev: int
     message: str
     success: bool
+    status: int
     history: list[float]
     best_anchors_history: list[np.ndarray]
     costs: np.ndarray
@@ -149,16 +164,6 @@ class PSOResult:
     pbest: np.ndarray | None = None
     pcost: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def x(self) -> np.ndarray:
-        """The best layout flattened (3M,), as scipy's ``x``."""
-        return self.anchors.ravel()
-
-    @property
-    def fun(self) -> float:
-        """Alias of ``cost``, as scipy's ``fun``."""
-        return self.cost
 
     def nfev_to_reach(self, target: float) -> int | None:
         """Evaluations needed until some evaluated cost is ≤ ``target`` (None if never)."""
@@ -171,6 +176,7 @@ class PSOResult:
         d["costs"] = np.asarray(self.costs).tolist()
         for k in ("pbest", "pcost"):
             d[k] = None if d[k] is None else np.asarray(d[k]).tolist()
+        d["fun"] = self.cost
         return d
 
 
@@ -564,6 +570,12 @@ class _Swarm:
         self.stopped = _stall(self.history, options)
 
     def result(self, message: str, success: bool, elapsed: float, resumed_from) -> PSOResult:
+        if not success:
+            status = 3
+        elif self.stopped == "stopped by callback":
+            status = 2
+        else:
+            status = 1 if self.stopped else 0
         return PSOResult(
             anchors=self.gbest.copy(),
             cost=self.gcost,
@@ -571,6 +583,7 @@ class _Swarm:
             nfev=self.nfev,
             message=message,
             success=success,
+            status=status,
             history=list(self.history),
             best_anchors_history=[np.array(a) for a in self.best_anchors_history],
             costs=np.array(self.costs),

@@ -30,11 +30,12 @@ import math
 import time
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from placement.rangetable import RangeTable, extend_table, range_table, table_costs
+from placement.result import LayoutResult
 from placement.surfaces import candidate_grid, mounting_surfaces, project, surface_index
 from simulation import checks
 from simulation.room import Room
@@ -482,20 +483,33 @@ def _selection(table, statistic, found, nfev, t) -> SimulatedSelection:
         nfev=int(nfev),
         table_windows=table.windows,
         timings={"table": t[1] - t[0], "search": t[2] - t[1]},
-        message="local optimum" if local else "evaluation budget reached",
+        status=0 if local else 1,
+        message=SELECTION_STATUS[0 if local else 1],
         table=table,
     )
 
 
-@dataclass
-class SimulatedSelection:
-    """Result of :func:`simulated_select`.
+#: status codes of :class:`SimulatedSelection`
+SELECTION_STATUS = {
+    0: "a local optimum of the swap neighbourhood",
+    1: "the evaluation budget ran out before a local optimum",
+}
+
+
+@dataclass(frozen=True)
+class SimulatedSelection(LayoutResult):
+    """Result of :func:`simulated_select` (the result convention of
+    :mod:`placement.result`).
 
     anchors (M, 3) the best layout and indices (M,) its candidates in ``candidates``;
-    cost its statistic on the table; optima the distinct local optima found, as
-    (indices, cost), best first; nfev the layouts scored on the table; table_windows the
-    received windows simulated; timings in seconds.
+    cost (``fun``) its statistic on the table (m² for the variance, m otherwise); optima
+    the distinct local optima found, as (indices, cost), best first; nfev the layouts
+    scored on the table; table_windows the received windows simulated; timings in
+    seconds; status a code of :data:`SELECTION_STATUS`.
     """
+
+    FUN: ClassVar[str] = "cost"
+    STATUS: ClassVar[dict[int, str]] = SELECTION_STATUS
 
     anchors: np.ndarray
     indices: np.ndarray
@@ -506,16 +520,10 @@ class SimulatedSelection:
     nfev: int
     table_windows: int
     timings: dict[str, float] = field(default_factory=dict)
+    success: bool = True
+    status: int = 0
     message: str = ""
     table: RangeTable | None = field(default=None, repr=False)
-
-    @property
-    def x(self) -> np.ndarray:
-        return self.anchors.ravel()
-
-    @property
-    def fun(self) -> float:
-        return self.cost
 
     def layouts(self, k: int | None = None) -> np.ndarray:
         """(k, M, 3) the anchors of the k best local optima."""
@@ -531,5 +539,8 @@ class SimulatedSelection:
             "nfev": self.nfev,
             "table_windows": self.table_windows,
             "timings": self.timings,
+            "success": self.success,
+            "status": self.status,
             "message": self.message,
+            "fun": self.cost,
         }

@@ -125,7 +125,7 @@ def _small(**kw):
 def test_simulated_select_returns_local_optima_better_than_random():
     sel = simulated_select(ROOM, 4, options=_small(), nodes=NODES, rng=0)
     t = sel.table
-    assert sel.message == "local optimum"
+    assert sel.success and sel.status == 0 and sel.fun == sel.cost
     assert sel.anchors.shape == (4, 3) and on_surfaces(ROOM, sel.anchors).all()
     assert sel.cost == pytest.approx(table_cost(t, sel.indices))
     nbr = nearest(t.candidates, 8)
