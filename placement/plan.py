@@ -554,7 +554,8 @@ def seed_then_pso(
     search : the search's settings (:class:`placement.simselect.SearchOptions` or a dict
         of its fields); its ``draws`` and ``exact_draws`` also set the swarm's draws.
     options, particles, iterations : the swarm's settings (default :data:`LOCAL_SWARM`
-        for a simulated cost, the paper's 15 × 40 otherwise); ``particles`` and
+        for a simulated cost with seeds, the paper's ``PSOOptions()`` otherwise);
+        ``particles`` and
         ``iterations`` set those fields, and must agree with ``options`` when both given.
     mount_tolerance : radius (m) of the in-plane mounting error in the scored draws and in
         the validation.
@@ -630,7 +631,9 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         cost, room, realizations=counts["realizations"], nodes=kw["nodes"], sigma=sigma
     )
     simulated = isinstance(cost, str) and cost in ("variance", "mean", "p95", "rms")
-    swarm = _swarm_options(kw["options"], counts["particles"], counts["iterations"], simulated)
+    # the local swarm works around seeds; without seeds it is the paper's swarm
+    local = simulated and kw["seeds"] is not None
+    swarm = _swarm_options(kw["options"], counts["particles"], counts["iterations"], local)
     validation = kw["validation"] or ValidationOptions()
     if not isinstance(validation, ValidationOptions):
         raise ValueError(
