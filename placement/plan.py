@@ -555,8 +555,8 @@ def seed_then_pso(
         of its fields); its ``draws`` and ``exact_draws`` also set the swarm's draws.
     options, particles, iterations : the swarm's settings (default :data:`LOCAL_SWARM`
         for a simulated cost with seeds, the paper's ``PSOOptions()`` otherwise);
-        ``particles`` and
-        ``iterations`` set those fields, and must agree with ``options`` when both given.
+        ``particles`` and ``iterations`` set those fields, and must agree with
+        ``options`` when both given.
     mount_tolerance : radius (m) of the in-plane mounting error in the scored draws and in
         the validation.
     finalists, finalist_draws : how many of the swarm's best distinct layouts, together
