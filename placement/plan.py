@@ -247,7 +247,7 @@ def analytic_seeds(
 #: seeds, moving on the scale of the candidate grid (docs/model.md, "Planning")
 LOCAL_SWARM = PSOOptions(
     particles=6,
-    iterations=3,
+    iterations=2,
     init_spread=0.1,
     velocity_clamp=0.03,
     init_velocity=0.01,
@@ -527,7 +527,7 @@ def seed_then_pso(
     particles: int | None = None,
     iterations: int | None = None,
     mount_tolerance: float = 0.03,
-    finalists: int = 4,
+    finalists: int = 1,
     finalist_draws: int = 4,
     validation: ValidationOptions | None = None,
     validate_realizations: int | None = None,
@@ -813,7 +813,9 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
     costs only); a degenerate layout is never chosen."""
     anchors, chosen, final = res.anchors, res.cost, []
     if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts or refined):
-        fresh = _draws_cost(room, run, run["finalist_draws"], 1, key=5, nodes_key=6)
+        # fresh draws mixed as the table's: half at the exact nodes, half moved
+        exact = max(1, run["finalist_draws"] // 2)
+        fresh = _draws_cost(room, run, run["finalist_draws"], exact, key=5, nodes_key=6)
         bar = _Bar(run["progress"], "finalists")
         final = choose_finalist(
             res, seed_layouts, fresh, run["finalists"], run["executor"], bar.update, refined

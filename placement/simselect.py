@@ -197,8 +197,10 @@ class SearchOptions:
         many, how many keep the nodes and planned points exactly, and the radius (m) of
         the mounting error in the others.
     chains : independent stochastic searches, each from its own start.
-    chain_draws : the first draws the chains score layouts on (fewer is faster); the
-        finishing descents and the fine lattices use every draw.
+    chain_draws : the first draws the chains score layouts on (fewer is faster; the
+        finishing descents and the fine lattices use every draw); None: as many of the
+        exact draws as keep a chain's positioning work per layout at that of one draw
+        with 8 anchors, ``max(1, min(exact_draws, 8 // M))``.
     random_starts : random layouts scored to pick each chain's start (the best is used).
     neighbours : the swap neighbourhood: this many nearest candidates of an anchor.
     batch : swaps sampled from the neighbourhood and scored together at each step.
@@ -213,16 +215,16 @@ class SearchOptions:
     """
 
     spacing: float = 0.4
-    draws: int = 2
-    exact_draws: int = 1
+    draws: int = 3
+    exact_draws: int = 2
     mount_tolerance: float = 0.03
     chains: int = 2
-    chain_draws: int = 1
+    chain_draws: int | None = None
     random_starts: int = 30
     neighbours: int = 48
     batch: int = 24
     patience: int = 16
-    evaluations: int = 6000
+    evaluations: int = 5000
     fine_spacings: tuple[float, ...] = (0.2, 0.1)
     fine_steps: int = 1
     fine_neighbours: int = 12
@@ -236,7 +238,8 @@ class SearchOptions:
         checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
         checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
         checks.count("chains", self.chains, low=1, high=10_000)
-        checks.count("chain_draws", self.chain_draws, low=1, high=self.draws)
+        if self.chain_draws is not None:
+            checks.count("chain_draws", self.chain_draws, low=1, high=self.draws)
         checks.count("random_starts", self.random_starts, low=1, high=100_000)
         checks.count("neighbours", self.neighbours, low=1, high=10_000)
         checks.count("batch", self.batch, low=1, high=self.neighbours)
@@ -333,7 +336,8 @@ SEGMENTS = 8
 def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress):
     """Start, advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
     ``workers`` jobs; [(S, cost, local, evaluations)] per chain."""
-    view = first_draws(table, opt.chain_draws)
+    n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
+    view = first_draws(table, n)
     chains = [
         Chain.start(view, M, statistic, opt.random_starts, _stream(seed, 10, k))
         for k in range(opt.chains)

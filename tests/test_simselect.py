@@ -117,7 +117,7 @@ def test_descent_returns_a_local_optimum_of_its_neighbourhood():
 
 def _small(**kw):
     base = dict(spacing=2.0, chains=2, evaluations=60, random_starts=3, neighbours=8, batch=4)
-    base.update(patience=3, draws=1)
+    base.update(patience=3, draws=1, exact_draws=1)
     base.update(kw)
     return SearchOptions(**base)
 
@@ -193,7 +193,7 @@ def test_search_options_are_checked():
         ({"chains": 0}, "chains"),
         ({"batch": 100}, "batch"),
         ({"draws": True}, "draws"),
-        ({"exact_draws": 3}, "exact_draws"),
+        ({"exact_draws": 4}, "exact_draws"),
         ({"fine_spacings": (0.0,)}, "fine_spacings"),
     ):
         with pytest.raises(ValueError, match=name):

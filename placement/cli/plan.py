@@ -55,8 +55,9 @@ def register(sub) -> None:
     p.add_argument(
         "--finalists",
         type=int,
-        default=4,
-        help="best distinct swarm layouts scored, with the seeds, on fresh draws (4)",
+        default=1,
+        help="best distinct swarm layouts scored, with the seeds and the refined layout, on "
+        "fresh draws (1)",
     )
     p.add_argument("--finalist-draws", type=int, default=4, help="fresh draws of the finalists (4)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
