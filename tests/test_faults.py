@@ -261,3 +261,23 @@ def test_dead_scheduler_fails_fast(tmp_path, capsys):
     assert err.count("\n") == 1 and "--scheduler tcp://127.0.0.1:9: cannot connect" in err
     assert main(["plan", "--scheduler", "no address", "--out", str(tmp_path / "o")]) == 2
     assert "--scheduler: expected an address like tcp://host:8786" in capsys.readouterr().err
+
+
+def _die_once(marker: str, value: int) -> int:
+    """Kill the worker process the first time (as the out-of-memory killer would)."""
+    import os
+    from pathlib import Path
+
+    if not Path(marker).exists():
+        Path(marker).write_text("died")
+        os._exit(9)
+    return value * 2
+
+
+def test_run_jobs_resubmits_a_job_whose_worker_died(tmp_path):
+    from placement.workers import WorkerPool, run_jobs
+
+    marker = str(tmp_path / "marker")
+    with WorkerPool(max_workers=2) as pool:
+        out = run_jobs(pool, _die_once, [(marker, 1), (marker, 2), (marker, 3)])
+    assert out == [2, 4, 6]
