@@ -246,7 +246,7 @@ def analytic_seeds(
 #: the swarm of ``seed_then_pso`` for a simulated cost: a few particles started around the
 #: seeds, moving on the scale of the candidate grid (docs/model.md, "Planning")
 LOCAL_SWARM = PSOOptions(
-    particles=6,
+    particles=5,
     iterations=2,
     init_spread=0.1,
     velocity_clamp=0.03,

@@ -206,6 +206,8 @@ class SearchOptions:
     batch : swaps sampled from the neighbourhood and scored together at each step.
     patience : steps without a gain before a kick.
     evaluations : layouts scored per chain (the descent that finishes it comes on top).
+    finish_neighbours : the neighbourhood of the finishing descents on the whole table
+        (the nearest ``finish_neighbours`` of the ``neighbours``).
     fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off).
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
     fine_neighbours : the swap neighbourhood of the descents on a grown table.
@@ -224,10 +226,11 @@ class SearchOptions:
     neighbours: int = 48
     batch: int = 24
     patience: int = 16
-    evaluations: int = 5000
+    evaluations: int = 4500
+    finish_neighbours: int = 16
     fine_spacings: tuple[float, ...] = (0.2, 0.1)
     fine_steps: int = 1
-    fine_neighbours: int = 12
+    fine_neighbours: int = 8
     fine_optima: int = 1
     keep: int = 3
     precision: str = "float32"
@@ -245,6 +248,7 @@ class SearchOptions:
         checks.count("batch", self.batch, low=1, high=self.neighbours)
         checks.count("patience", self.patience, low=1, high=100_000)
         checks.count("evaluations", self.evaluations, low=1, high=10**7)
+        checks.count("finish_neighbours", self.finish_neighbours, low=1, high=10_000)
         object.__setattr__(self, "fine_spacings", tuple(self.fine_spacings))
         for s in self.fine_spacings:
             checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
@@ -351,7 +355,8 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
                 chains[k] = c
         if progress:
             progress("search", seg, SEGMENTS + 1)
-    jobs = [(table, statistic, nbr, [(k, chains[k]) for k in ks], seed) for ks in parts]
+    near = nbr[:, : opt.finish_neighbours]
+    jobs = [(table, statistic, near, [(k, chains[k]) for k in ks], seed) for ks in parts]
     found = [r for part in _map(executor, _finish, jobs) for r in part]
     if progress:
         progress("search", SEGMENTS + 1, SEGMENTS + 1)
