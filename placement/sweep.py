@@ -110,14 +110,15 @@ def sweep(
     anchors=range(4, 11),
     *,
     target_p95: float | None = None,
-    progress=None,
+    on_row=None,
     **seed_then_pso_kwargs,
 ) -> SweepResult:
     """Plan each anchor count in ``anchors`` with :func:`placement.seed_then_pso` (its
     keyword arguments pass through; every M uses the same ``rng``) on one shared range
     table, and recommend the smallest M whose validated P95 (m) ≤ ``target_p95``.
 
-    progress : an optional callable ``progress(M, row)`` called after each M.
+    on_row : an optional callable ``on_row(M, row)`` called after each M (``progress``
+        passes through to :func:`placement.seed_then_pso`, as its other keywords).
     """
     from placement.plan import _search_options, seed_then_pso
     from placement.simselect import new_points, search_table
@@ -151,8 +152,8 @@ def sweep(
         t = time.perf_counter()
         res = seed_then_pso(room, M, search=search, rng=entropy, table=table, **kw)
         rows.append(_row(M, res, time.perf_counter() - t))
-        if progress:
-            progress(M, rows[-1])
+        if on_row:
+            on_row(M, rows[-1])
     recommended = None
     if target_p95 is not None:
         recommended = next((r.M for r in rows if r.p95 <= target_p95), None)

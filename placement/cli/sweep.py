@@ -81,7 +81,8 @@ def run(args) -> int:
             executor=executor,
             workers=workers,
             validate_realizations=args.validate_realizations,
-            progress=report,
+            progress=not args.no_progress,
+            on_row=report,
         )
     out.mkdir(parents=True, exist_ok=True)
     (out / "sweep.json").write_text(res.to_json(indent=1) + "\n")
