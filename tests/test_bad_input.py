@@ -403,7 +403,7 @@ def files(tmp_path):
         (["plan", "--particles", "1", "--out", "{t}/o"], "--particles"),
         (["plan", "--eval-timeout", "0", "--out", "{t}/o"], "--eval-timeout"),
         (["plan", "--workers", "-1", "--out", "{t}/o"], "--workers"),
-        (["plan", "--validate-realizations", "1000000000", "--out", "{t}/o"], "memory"),
+        (["plan", "--validate-realizations", "1000000000", "--out", "{t}/o"], "--validate-"),
         (["evaluate", "--layout", "{t}/ok.json", "--realizations", "0", "--out", "{t}/o"], "--r"),
         (["evaluate", "--layout", "{t}/ok.json", "--snr", "1e6", "--out", "{t}/o"], "--snr"),
         (["bounds", "--sigma", "nan"], "--sigma"),

@@ -149,7 +149,7 @@ def test_pso_never_evaluates_a_forbidden_layout(room, seed):
         4,
         initial=initial,
         options=PSOOptions(particles=4, iterations=4, tol=0.0),
-        seed=seed,
+        rng=seed,
     )
     assert len(seen) == 16
     assert_allowed(room, np.array(seen))
@@ -159,7 +159,7 @@ def test_pso_never_evaluates_a_forbidden_layout(room, seed):
 def test_pso_with_peb_cost_respects_the_office_keepouts():
     room = Room.from_toml(OFFICE)
     cost = placement.make_cost("peb", room)
-    res = pso(cost, room, 6, options=PSOOptions(particles=5, iterations=5, tol=0.0), seed=0)
+    res = pso(cost, room, 6, options=PSOOptions(particles=5, iterations=5, tol=0.0), rng=0)
     assert_allowed(room, res.anchors)
     assert_allowed(room, np.array(res.best_anchors_history))
     assert_allowed(room, res.pbest)
