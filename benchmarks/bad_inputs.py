@@ -209,7 +209,7 @@ def _plan_cases() -> None:
         ("M", True),
         ("finalists", 1.5),
         ("validate_realizations", -1),
-        ("finalist_realizations", 0),
+        ("finalist_draws", 0),
         ("realizations", True),
         ("M", 300),
         ("iterations", "2"),

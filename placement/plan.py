@@ -634,6 +634,11 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     # the local swarm works around seeds; without seeds it is the paper's swarm
     local = simulated and kw["seeds"] is not None
     swarm = _swarm_options(kw["options"], counts["particles"], counts["iterations"], local)
+    if counts["finalists"] > swarm.particles:
+        raise ValueError(
+            f"finalists: must be an integer in [1, {swarm.particles}] (the swarm's "
+            f"particles), got {counts['finalists']}"
+        )
     validation = kw["validation"] or ValidationOptions()
     if not isinstance(validation, ValidationOptions):
         raise ValueError(

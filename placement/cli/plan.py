@@ -140,7 +140,10 @@ def _check_args(args, room):
     if args.iterations is not None:
         checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
     checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
-    checks.count("--finalists", args.finalists, low=1, high=1000)
+    from placement.plan import LOCAL_SWARM
+
+    particles = args.particles or (LOCAL_SWARM.particles if not args.no_seeds else 15)
+    checks.count("--finalists", args.finalists, low=1, high=particles)
     checks.count("--finalist-draws", args.finalist_draws, low=1, high=MAX_REALIZATIONS)
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
