@@ -13,6 +13,7 @@ import numpy as np
 
 from analysis import figures as F
 from analysis.report import Context, Figure, _array
+from simulation.statistics import cost_unit
 
 logger = logging.getLogger(__name__)
 
@@ -215,13 +216,6 @@ def _layouts(figs: _Figures) -> None:
         lambda: F.layout_views(
             room, {e.name: e.anchors for e in ctx.layouts}, colors=ctx.colors, dpi=figs.dpi
         ),
-    )
-
-
-def cost_unit(name) -> str:
-    """The unit of a plan's cost by its name ("" when unknown)."""
-    return {"variance": "m²", "mean": "m", "p95": "m", "rms": "m", "peb": "m"}.get(
-        str(name).lower(), ""
     )
 
 

@@ -34,7 +34,7 @@ from placement.plan import seed_then_pso
 from placement.serialization import to_jsonable
 from placement.validation import validate_layout
 from placement.workers import WorkerPool
-from simulation import Room
+from simulation import Room, checks
 
 
 def _summary(v: dict) -> dict:
@@ -49,7 +49,7 @@ def _summary(v: dict) -> dict:
 
 def _validation_rng(res) -> int:
     """The validation stream of a run (as seed_then_pso derives it)."""
-    return int(np.random.SeedSequence(res.settings["seed"], spawn_key=(4,)).generate_state(1)[0])
+    return checks.substream(res.settings["seed"], 4)
 
 
 def run(room, M, seed, args, ex, unseeded=False) -> dict:
@@ -92,8 +92,7 @@ def baseline(room, M, seed, folder: Path, ex) -> dict | None:
     if not path.exists():
         return None
     anchors = np.array(json.loads(path.read_text())["anchors"])
-    # the validation stream seed_then_pso(rng=seed) uses (plan._substream(seed, 4))
-    rng = int(np.random.SeedSequence(seed, spawn_key=(4,)).generate_state(1)[0])
+    rng = checks.substream(seed, 4)  # the validation stream of seed_then_pso(rng=seed)
     v = validate_layout(room, anchors, rng=rng, executor=ex)
     return {"source": str(path), "anchors": anchors.tolist(), **_summary(v)}
 

@@ -3,13 +3,15 @@
 The top layer: imports :mod:`analysis` and :mod:`simulation`, never the reverse.
 """
 
-from placement.costs import PEBCost, SimulatedCost, make_cost
+from placement.anchor_sweep import SweepResult, sweep
+from placement.costs import DrawsCost, PEBCost, SimulatedCost, make_cost
 from placement.exhaustive import ExhaustiveResult, exhaustive_search
 from placement.plan import PlacementResult, SeedLayout, seed_then_pso
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.refine import RefineResult, refine_peb
 from placement.relaxation import Selection, relax_select
 from placement.result import LayoutResult
+from placement.simselect import SearchOptions
 from placement.surfaces import (
     MountingSurface,
     aim,
@@ -27,9 +29,15 @@ from placement.surfaces import (
     surface_index,
     to_uv,
 )
+from placement.validation import ValidationOptions
 from placement.workers import WorkerLost, WorkerPool
 
 __all__ = [
+    "DrawsCost",
+    "SearchOptions",
+    "SweepResult",
+    "ValidationOptions",
+    "sweep",
     "PEBCost",
     "PSOOptions",
     "PSOResult",

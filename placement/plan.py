@@ -24,7 +24,6 @@ convex relaxations and their refinements instead (:func:`analytic_seeds`).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import logging
 import math
@@ -41,19 +40,19 @@ from placement.costs import DrawsCost, cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.rangetable import node_draws
 from placement.result import LayoutResult
-from placement.serialization import to_jsonable
+from placement.serialization import fingerprint, to_jsonable, write_json_atomic
 from placement.simselect import SearchOptions
 from placement.surfaces import random_layout
 from placement.validation import ValidationOptions, validate_layout
+from placement.workers import executor_workers, run_calls
 from simulation import checks
 from simulation.room import Room, as_room
+from simulation.statistics import cost_unit
 
 logger = logging.getLogger(__name__)
 
 #: random layouts screened by mean PEB for the "auto" seeds, and how many are kept
 RANDOM_SCREEN, RANDOM_KEEP = 512, 2
-#: local optima of the simulation-driven candidate search kept as "auto" seeds
-SIMULATED_KEEP = 3
 
 
 @dataclass
@@ -83,12 +82,6 @@ PLACEMENT_STATUS = {
     0: "a layout was planned",
     1: "no usable layout: every candidate failed or is degenerate",
 }
-
-
-def cost_unit(name: str) -> str:
-    """The unit of a cost by name: m² for the variance, m for the other statistics and
-    the mean PEB, "" for a user's callable."""
-    return {"variance": "m²", "mean": "m", "p95": "m", "rms": "m", "peb": "m"}.get(name, "")
 
 
 @dataclass(frozen=True)
@@ -297,10 +290,6 @@ def _search_options(search) -> SearchOptions:
     return SearchOptions(**search)
 
 
-def _substream(entropy: int, key: int) -> int:
-    return int(np.random.SeedSequence(entropy, spawn_key=(key,)).generate_state(1)[0])
-
-
 class _Clock:
     """Seconds and cost evaluations per phase."""
 
@@ -321,7 +310,7 @@ class _Clock:
 
 
 def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes, entropy) -> str:
-    blob = json.dumps(
+    return fingerprint(
         {
             "room": room.to_dict(),
             "M": M,
@@ -329,10 +318,8 @@ def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes
             "statistic": statistic,
             "nodes": None if nodes is None else np.asarray(nodes).tolist(),
             "seed": entropy,
-        },
-        sort_keys=True,
+        }
     )
-    return hashlib.sha256(blob.encode()).hexdigest()
 
 
 def build_table(
@@ -448,11 +435,9 @@ def _load_sidecar(path: Path) -> dict:
     return data
 
 
-def _write_sidecar(path: Path, fingerprint: str, seeds, summary) -> None:
-    blob = {"fingerprint": fingerprint, "seeds": [s.to_dict() for s in seeds], "summary": summary}
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(to_jsonable(blob)))
-    tmp.replace(path)
+def _write_sidecar(path: Path, print_: str, seeds, summary) -> None:
+    blob = {"fingerprint": print_, "seeds": [s.to_dict() for s in seeds], "summary": summary}
+    write_json_atomic(path, blob)
 
 
 def _score(cost, anchors) -> float:
@@ -461,6 +446,20 @@ def _score(cost, anchors) -> float:
     except Exception as exc:  # noqa: BLE001 - a failed re-score only drops that finalist
         logger.warning("scoring a finalist failed: %s", exc)
         return math.inf
+
+
+def best_distinct(res: PSOResult, count: int, exclude=()) -> list[int]:
+    """Indices of the ``count`` best particle layouts of a swarm (by their best cost,
+    finite only), distinct from each other and from the layouts ``exclude``."""
+    picked: list[int] = []
+    taken = [np.asarray(a, dtype=float) for a in exclude]
+    for i in np.argsort(res.pcost, kind="stable"):
+        if len(picked) == count or not math.isfinite(res.pcost[i]):
+            break
+        if not any(np.allclose(res.pbest[i], a) for a in taken):
+            picked.append(int(i))
+            taken.append(res.pbest[i])
+    return picked
 
 
 def choose_finalist(
@@ -479,37 +478,18 @@ def choose_finalist(
     picked: list[tuple[str, np.ndarray, float]] = [
         (name, np.asarray(a, dtype=float), math.nan) for name, a in refined
     ]
-    for i in np.argsort(res.pcost, kind="stable"):
-        if len(picked) == count + len(refined) or not math.isfinite(res.pcost[i]):
-            break
-        if not any(np.allclose(res.pbest[i], a) for _, a, _ in picked):
-            same = [s.name for s in seeds if np.allclose(s.anchors, res.pbest[i])]
-            source = same[0] if same else "swarm"
-            picked.append((source, res.pbest[i].copy(), float(res.pcost[i])))
+    for i in best_distinct(res, count, exclude=[a for _, a, _ in picked]):
+        same = [s.name for s in seeds if np.allclose(s.anchors, res.pbest[i])]
+        source = same[0] if same else "swarm"
+        picked.append((source, res.pbest[i].copy(), float(res.pcost[i])))
     for s in seeds:
         if not any(np.allclose(s.anchors, a) for _, a, _ in picked):
             picked.append((s.name, np.asarray(s.anchors), float(s.cost)))
-    if executor is None:
-        pending = [_Later(_score, cost, a) for _, a, _ in picked]
-    else:
-        pending = [executor.submit(_score, cost, a) for _, a, _ in picked]
-    values = []
-    for fut in pending:
-        values.append(fut.result())
-        if progress:
-            progress(len(values), len(pending))
+    values = run_calls(executor, [(_score, (cost, a)) for _, a, _ in picked], progress=progress)
     return [
         {"source": src, "anchors": a, "pso_cost": c, "cost": v}
         for (src, a, c), v in zip(picked, values, strict=True)
     ]
-
-
-class _Later:
-    def __init__(self, fn, *args):
-        self.fn, self.args = fn, args
-
-    def result(self):
-        return self.fn(*self.args)
 
 
 def _degenerate(anchors) -> bool:
@@ -575,7 +555,7 @@ def seed_then_pso(
         beside it); rerunning with the same arguments resumes.
     table : a range table to search instead of building one
         (:func:`placement.rangetable.range_table` with the search's spacing and draws), to
-        share it between runs (e.g. :func:`placement.sweep.sweep`).
+        share it between runs (e.g. :func:`placement.sweep`).
     """
     room = as_room(room)
     run = _prepare(room, locals())
@@ -672,7 +652,7 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         "finalists": counts["finalists"],
         "finalist_draws": counts["finalist_draws"],
         "executor": kw["executor"],
-        "workers": counts["workers"] or _workers(kw["executor"]),
+        "workers": counts["workers"] or executor_workers(kw["executor"]),
         "progress": checks.flag("progress", kw["progress"]),
         "callback": kw["callback"],
         "checkpoint": None if checkpoint is None else checks.output_path("checkpoint", checkpoint),
@@ -680,23 +660,16 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     }
 
 
-def _workers(executor) -> int:
-    if executor is None:
-        return 1
-    n = getattr(executor, "_max_workers", None)
-    return int(n) if n else 2
-
-
 def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: int, nodes_key: int):
     """A :class:`DrawsCost` of the run's statistic over ``draws`` scene draws."""
     grid = room.grid() if run["nodes"] is None else run["nodes"]
-    sets = node_draws(room, grid, draws, exact, _substream(run["entropy"], nodes_key))
+    sets = node_draws(room, grid, draws, exact, checks.substream(run["entropy"], nodes_key))
     return DrawsCost(
         room,
         sets,
         exact_draws=exact,
         mount_tolerance=run["mount_tolerance"],
-        seed=_substream(run["entropy"], key),
+        seed=checks.substream(run["entropy"], key),
         statistic=run["cost"],
         precision=run["search"].precision,
     )
@@ -710,7 +683,7 @@ def _table(room: Room, run: dict):
             room,
             run["search"],
             run["nodes"],
-            _substream(run["entropy"], 1),
+            checks.substream(run["entropy"], 1),
             run["executor"],
             run["progress"],
         )
@@ -728,7 +701,7 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
             statistic=run["cost"],
             options=run["search"],
             nodes=run["nodes"],
-            rng=_substream(run["entropy"], 3),
+            rng=checks.substream(run["entropy"], 3),
             sigma=run["sigma"],
             executor=run["executor"],
             workers=run["workers"],
@@ -789,12 +762,7 @@ def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
         return []
     from placement.simselect import refine_on_table
 
-    starts: list[np.ndarray] = []
-    for i in np.argsort(res.pcost, kind="stable"):
-        if len(starts) == opt.fine_optima or not math.isfinite(res.pcost[i]):
-            break
-        if not any(np.allclose(res.pbest[i], a) for a in starts):
-            starts.append(res.pbest[i])
+    starts = [res.pbest[i] for i in best_distinct(res, opt.fine_optima)]
     bar = _Bar(run["progress"], "refinement")
     bar.update(0, 1)
     out, table, nfev = refine_on_table(
@@ -803,7 +771,7 @@ def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
         starts,
         statistic=run["cost"],
         options=opt,
-        rng=_substream(run["entropy"], 7),
+        rng=checks.substream(run["entropy"], 7),
         executor=run["executor"],
         workers=run["workers"],
     )
@@ -841,7 +809,7 @@ def _validate(room: Room, run: dict, anchors, success: bool, clock: _Clock) -> d
         out = validate_layout(
             room,
             anchors,
-            rng=_substream(run["entropy"], 4),
+            rng=checks.substream(run["entropy"], 4),
             options=run["validation"],
             mount_tolerance=run["mount_tolerance"],
             nodes=run["nodes"],

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
-import hashlib
 import inspect
 import json
 import logging
@@ -37,8 +36,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from placement.result import LayoutResult
+from placement.serialization import fingerprint, write_json_atomic
 from placement.surfaces import project, random_layout
-from placement.workers import WorkerPool
+from placement.workers import ExecutorBroken, WorkerPool, executor_workers
 from simulation import checks
 from simulation.room import Room, as_room
 
@@ -51,11 +51,6 @@ _CHECKPOINT_KEYS = (
     "gcost", "history", "best_anchors_history", "costs", "nfev", "failures", "rng",
     "stopped", "elapsed",
 )  # fmt: skip
-
-
-class ExecutorBroken(RuntimeError):
-    """The executor cannot run evaluations any more (e.g. a worker process of a
-    ``ProcessPoolExecutor`` died: ``BrokenProcessPool``)."""
 
 
 class EvaluationTimeout(Exception):
@@ -190,13 +185,7 @@ def nfev_to_reach(costs, target: float) -> int | None:
 
 def evaluation_rng(seed: int, iteration: int, particle: int) -> np.random.Generator:
     """The noise stream of particle ``particle`` at ``iteration`` for a run seeded ``seed``."""
-    return np.random.Generator(
-        np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(1, iteration, particle)))
-    )
-
-
-def _stream(seed: int, key: int) -> np.random.Generator:
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(key,))))
+    return checks.stream(seed, 1, iteration, particle)
 
 
 def _can_alarm() -> bool:
@@ -242,11 +231,6 @@ def _evaluate_chunk(
     return out
 
 
-def _workers(executor: Executor) -> int:
-    n = getattr(executor, "_max_workers", None)
-    return int(n) if n else (os.cpu_count() or 2)
-
-
 #: seconds added to the executor's deadline for a chunk under ``eval_timeout``
 _DEADLINE_GRACE = 10.0
 
@@ -283,7 +267,7 @@ def evaluate_swarm(
     if executor is None:
         results = _evaluate_chunk(cost, layouts, seed, iteration, ids, eval_timeout)
     else:
-        size = chunksize or max(1, math.ceil(K / _workers(executor)))
+        size = chunksize or max(1, math.ceil(K / executor_workers(executor)))
         starts = {}
         try:
             for i in range(0, K, size):
@@ -301,7 +285,7 @@ def evaluate_swarm(
             raise _broken(iteration, exc) from None
         deadline = None
         if eval_timeout is not None:
-            rounds = math.ceil(len(starts) / _workers(executor))
+            rounds = math.ceil(len(starts) / executor_workers(executor))
             deadline = time.monotonic() + rounds * size * eval_timeout + _DEADLINE_GRACE
         results = [None] * K
         pending = set(starts)
@@ -425,7 +409,7 @@ def _check_cost(cost, executor) -> Callable:
 
 
 def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed, initial) -> str:
-    blob = json.dumps(
+    return fingerprint(
         {
             "room": room.to_dict(),
             "M": M,
@@ -433,19 +417,8 @@ def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed,
             "cost": cost_label,
             "seed": seed,
             "initial": None if initial is None else np.asarray(initial).tolist(),
-        },
-        sort_keys=True,
+        }
     )
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
-def _write_atomic(path: Path, state: dict) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w") as fh:
-        json.dump(state, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
 
 
 @dataclass
@@ -484,7 +457,7 @@ class _Swarm:
             pcost=costs.copy(),
             gbest=x[best].copy(),
             gcost=float(costs[best]),
-            rng=_stream(seed, 0),
+            rng=checks.stream(seed, 0),
             history=[float(costs[best])],
             best_anchors_history=[x[best].tolist()],
             costs=[costs.tolist()],
@@ -783,7 +756,7 @@ def _start(room: Room, args: dict) -> _Swarm:
     """The first iteration: positions, velocities and their costs (checkpointed)."""
     seed, options = args["seed"], args["options"]
     entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
-    init_rng = _stream(entropy, 2)
+    init_rng = checks.stream(entropy, 2)
     x = initial_positions(room, args["M"], args["initial"], options, init_rng)
     v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * np.array(room.size)
     counts = {"lost": 0, "timeouts": 0}
@@ -793,7 +766,7 @@ def _start(room: Room, args: dict) -> _Swarm:
     )  # fmt: skip
     swarm = _Swarm.start(entropy, x, v, costs, failures, counts)
     if args["ckpt"] is not None:
-        _write_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]))
+        write_json_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]), strict=False)
     return swarm
 
 
@@ -819,7 +792,7 @@ def _iterate(room: Room, swarm: _Swarm, args: dict, elapsed, resumed_from, bar) 
     if callback is not None and callback(swarm.result("running", True, elapsed(), resumed_from)):
         swarm.stopped = "stopped by callback"
     if args["ckpt"] is not None:
-        _write_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]))
+        write_json_atomic(args["ckpt"], swarm.to_state(args["fingerprint"]), strict=False)
     if bar is not None:
         bar.update(1)
         bar.set_postfix(best=f"{swarm.gcost:.4g}")

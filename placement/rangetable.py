@@ -72,10 +72,6 @@ class RangeTable:
         return int(self.ranges.size)
 
 
-def _stream(seed: int, *key: int) -> np.random.Generator:
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
-
-
 def cell_size(nodes: np.ndarray) -> np.ndarray:
     """(3,) the spacing of a node grid along each axis (0 where all nodes share a value)."""
     out = np.zeros(3)
@@ -119,7 +115,7 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
         if d < exact_draws:
             out[d] = p
         else:
-            move = _stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
+            move = checks.stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
             out[d] = np.clip(p + move, lo, hi)
     return out
 
@@ -139,7 +135,7 @@ def mounted_points(
     index = surface_index(room, c)
     out = c.copy()
     for row, (j, s) in enumerate(zip(ids, index, strict=True)):
-        u1, u2 = _stream(seed, 2, int(j), draw).random(2)
+        u1, u2 = checks.stream(seed, 2, int(j), draw).random(2)
         radius, angle = tolerance * np.sqrt(u1), 2 * np.pi * u2
         uv = surfs[int(s)].uv_axes if s >= 0 else (0, 1)
         out[row, uv[0]] += radius * np.cos(angle)
@@ -167,7 +163,10 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
             exact_scene = scene if exact else None
         noise = np.stack(
             [
-                s * _stream(spec["seed"], 0, int(j), d).standard_normal(scene.windows.shape[::2])
+                s
+                * checks.stream(spec["seed"], 0, int(j), d).standard_normal(
+                    scene.windows.shape[::2]
+                )
                 for s, j in zip(scene.noise_sigma, ids, strict=True)
             ],
             axis=1,
@@ -261,28 +260,33 @@ def extend_table(
     )
 
 
-def table_errors(table: RangeTable, layouts) -> np.ndarray:
-    """(L, D·P) Euclidean position errors (m) of layouts of candidates ``layouts`` (L, M)
-    indices over every draw and node of the table, positioned in one batch."""
+def _fixes(table: RangeTable, layouts):
+    """The :class:`~simulation.positioning.PositionFix` of layouts (L, M) of candidates
+    over every draw and node of the table, positioned in one batch."""
     from simulation.positioning import locate
 
     S = np.asarray(layouts, dtype=int)
     ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
-    x = locate(table.candidates[S], ranges, region=table.region)
-    return np.linalg.norm(x - table.nodes, axis=-1).reshape(len(S), -1)
+    return locate(table.candidates[S], ranges, region=table.region, full_output=True)
+
+
+def table_errors(table: RangeTable, layouts) -> np.ndarray:
+    """(L, D·P) Euclidean position errors (m) of layouts of candidates ``layouts`` (L, M)
+    indices over every draw and node of the table, positioned in one batch."""
+    x = _fixes(table, layouts).x
+    return np.linalg.norm(x - table.nodes, axis=-1).reshape(len(x), -1)
 
 
 def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
     """(L,) the simulated ``statistic`` of each layout's errors over all D · P table
     entries (:func:`table_errors`); +inf for a layout where some fix is not finite or
-    whose anchors are collinear."""
-    S = np.asarray(layouts, dtype=int)
-    e = table_errors(table, S)
-    stat = STATISTICS[statistic]
+    whose anchors are collinear (``locate``'s status −1)."""
+    fix = _fixes(table, layouts)
+    e = np.linalg.norm(fix.x - table.nodes, axis=-1).reshape(len(fix.x), -1)
     # collinear or coincident anchors leave the position undetermined: never a solution
-    fixed = checks.anchor_rank(table.candidates[S]) >= 2
-    rows = zip(e, np.atleast_1d(fixed), strict=True)
-    return np.array([stat(r) if ok else math.inf for r, ok in rows])
+    fixed = ~np.any(fix.status.reshape(len(e), -1) == -1, axis=1)
+    stat = STATISTICS[statistic]
+    return np.array([stat(row) if ok else math.inf for row, ok in zip(e, fixed, strict=True)])
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

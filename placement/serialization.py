@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
+import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,3 +25,23 @@ def to_jsonable(obj: Any) -> Any:
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def fingerprint(parts: dict) -> str:
+    """SHA-256 of the canonical JSON of ``parts`` (sorted keys): identifies the arguments
+    a checkpoint was written with."""
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()
+
+
+def write_json_atomic(path: str | os.PathLike, obj, strict: bool = True) -> None:
+    """Write ``obj`` as JSON to ``path`` atomically (a temporary file, flushed to disk,
+    then renamed over ``path``), so a crash never leaves a half-written file. ``strict``:
+    non-finite numbers become null (:func:`to_jsonable`); otherwise they are written as
+    Python's ``Infinity``/``NaN`` and read back unchanged (checkpoints)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w") as fh:
+        json.dump(to_jsonable(obj) if strict else obj, fh)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)

@@ -271,10 +271,6 @@ def first_draws(table: RangeTable, n: int) -> RangeTable:
     )
 
 
-def _stream(seed: int, *key: int) -> np.random.Generator:
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
-
-
 def _advance(table, statistic, nbr, opt, chains, until):
     """Advance each chain (one job) to ``until`` scored layouts; returns them."""
     return [
@@ -298,7 +294,7 @@ def _finish(table, statistic, nbr, chains, seed):
     for k, c in chains:
         score = _Scorer(table, statistic, 10**9)
         f = float(score([c.best])[0])
-        S, f, local = descend(c.best, f, nbr, score, _stream(seed, 11, k))
+        S, f, local = descend(c.best, f, nbr, score, checks.stream(seed, 11, k))
         out.append((np.sort(S), f, local, c.nfev + score.nfev))
     return out
 
@@ -308,7 +304,7 @@ def _descents(table, statistic, nbr, layouts, seed, key):
     each with the stream of its number; [(S, cost, local, n)]."""
     out = []
     for i, S in layouts:
-        rng = _stream(seed, key, i)
+        rng = checks.stream(seed, key, i)
         score = _Scorer(table, statistic, 10**9)
         S, f, local = descend(S, float(score([S])[0]), nbr, score, rng)
         out.append((np.sort(S), f, local, score.nfev))
@@ -343,7 +339,7 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
     view = first_draws(table, n)
     chains = [
-        Chain.start(view, M, statistic, opt.random_starts, _stream(seed, 10, k))
+        Chain.start(view, M, statistic, opt.random_starts, checks.stream(seed, 10, k))
         for k in range(opt.chains)
     ]
     parts = _split(list(range(opt.chains)), max(1, workers))
@@ -363,13 +359,19 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     return found
 
 
+def search_candidates(room: Room, spacing: float) -> np.ndarray:
+    """(N, 3) the distinct points of ``candidate_grid(room, spacing)`` (the grids of two
+    surfaces meet at their shared edge)."""
+    return new_points(np.empty((0, 3)), candidate_grid(room, spacing))
+
+
 def search_table(
     room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None
 ) -> RangeTable:
     """The range table of a search: every distinct point of
     ``candidate_grid(room, options.spacing)`` on ``options.draws`` scene draws of ``nodes``
     (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
-    cand = new_points(np.empty((0, 3)), candidate_grid(room, options.spacing))
+    cand = search_candidates(room, options.spacing)
     return range_table(
         room,
         cand,

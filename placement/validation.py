@@ -24,7 +24,8 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from placement.rangetable import mounted_points, node_region
+from placement.rangetable import mounted_points
+from placement.workers import run_calls
 from simulation import checks
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
@@ -112,33 +113,6 @@ def _mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision) -> n
     return np.linalg.norm(x - nodes, axis=-1)
 
 
-def _submit(executor, fn, *args):
-    if executor is None:
-        return _Lazy(fn, args)
-    return executor.submit(fn, *args)
-
-
-class _Lazy:
-    """Runs ``fn(*args)`` the first time its result is asked for (serial runs)."""
-
-    def __init__(self, fn, args):
-        self.fn, self.args, self.done, self.value = fn, args, False, None
-
-    def result(self):
-        if not self.done:
-            self.value, self.done = self.fn(*self.args), True
-        return self.value
-
-
-def _wait(jobs: dict, progress) -> None:
-    """Wait for every job, reporting (done, total) to ``progress``."""
-    flat = [j for v in jobs.values() for j in (v if isinstance(v, list) else [v])]
-    for k, job in enumerate(flat):
-        job.result()
-        if progress:
-            progress(k + 1, len(flat))
-
-
 def validate_layout(
     room: Room,
     anchors,
@@ -174,9 +148,9 @@ def validate_layout(
     # the grid check in two halves, each with its own stream, to keep two workers busy
     halves = [opt.realizations - opt.realizations // 2, opt.realizations // 2]
     streams = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
-    jobs: dict[str, Any] = {
+    calls: dict[str, list] = {
         "grid": [
-            _submit(executor, _evaluate, room, a, nodes, R, s, opt.precision)
+            (_evaluate, (room, a, nodes, R, s, opt.precision))
             for R, s in zip(halves, streams, strict=True)
             if R > 0
         ]
@@ -184,18 +158,19 @@ def validate_layout(
     if opt.held_out_realizations:
         R = opt.held_out_realizations
         rnd = random_nodes(room, opt.random_nodes, np.random.default_rng(child[1]))
-        jobs["held_grid"] = _submit(
-            executor, _evaluate, room, a, held_out_grid(room), R, child[2], opt.precision
-        )
-        jobs["held_random"] = _submit(executor, _evaluate, room, a, rnd, R, child[3], opt.precision)
+        calls["held_grid"] = [
+            (_evaluate, (room, a, held_out_grid(room), R, child[2], opt.precision))
+        ]
+        calls["held_random"] = [(_evaluate, (room, a, rnd, R, child[3], opt.precision))]
     if opt.mount_draws and mount_tolerance > 0:
-        jobs["mounting"] = [
-            _submit(executor, _mounted_errors, room, a, nodes, mount_tolerance, d, child[0],
-                    opt.precision)
+        calls["mounting"] = [
+            (_mounted_errors, (room, a, nodes, mount_tolerance, d, child[0], opt.precision))
             for d in range(opt.mount_draws)
-        ]  # fmt: skip
-    _wait(jobs, progress)
-    parts = [j.result() for j in jobs["grid"]]
+        ]
+    flat = [c for group in calls.values() for c in group]
+    results = iter(run_calls(executor, flat, progress=progress))
+    jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
+    parts = jobs["grid"]
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
     out.update(
@@ -215,14 +190,14 @@ def validate_layout(
         }
     )
     if "held_grid" in jobs:
-        g, r = jobs["held_grid"].result(), jobs["held_random"].result()
+        (g,), (r,) = jobs["held_grid"], jobs["held_random"]
         out["held_out"] = {
             "realizations": int(opt.held_out_realizations),
             "grid": {**summary(g.errors), "nodes": int(len(g.nodes))},
             "random": {**summary(r.errors), "nodes": int(len(r.nodes))},
         }
     if "mounting" in jobs:
-        errs = np.concatenate([j.result() for j in jobs["mounting"]])
+        errs = np.concatenate(jobs["mounting"])
         out["mounting"] = {
             "tolerance_m": float(mount_tolerance),
             "draws": int(opt.mount_draws),
@@ -233,4 +208,4 @@ def validate_layout(
     return out
 
 
-__all__ = ["ValidationOptions", "held_out_grid", "node_region", "random_nodes", "validate_layout"]
+__all__ = ["ValidationOptions", "held_out_grid", "random_nodes", "validate_layout"]

@@ -26,17 +26,28 @@ import tempfile
 import threading
 import time
 import weakref
-from concurrent.futures import Executor, Future, InvalidStateError, ProcessPoolExecutor
+from concurrent.futures import (
+    BrokenExecutor,
+    Executor,
+    Future,
+    InvalidStateError,
+    ProcessPoolExecutor,
+)
 from concurrent.futures.process import BrokenProcessPool
 
 from simulation import checks
 
-__all__ = ["WorkerLost", "WorkerPool", "available_cores"]
+__all__ = ["ExecutorBroken", "WorkerLost", "WorkerPool", "available_cores"]
 
 #: how often (s) a worker checks that its parent is alive
 PARENT_POLL = 0.2
 #: a task is run at most this many times when other workers' deaths interrupt it
 MAX_ATTEMPTS = 3
+
+
+class ExecutorBroken(RuntimeError):
+    """The executor cannot run work any more (e.g. a worker process of a
+    ``ProcessPoolExecutor`` died: ``BrokenProcessPool``)."""
 
 
 class WorkerLost(RuntimeError):
@@ -265,30 +276,50 @@ class WorkerPool(Executor):
         return f"WorkerPool(max_workers={self._max_workers})"
 
 
-def run_jobs(executor, fn, jobs, *, retries: int = 2, progress=None) -> list:
-    """``[fn(*job) for job in jobs]``, on ``executor`` when given (all submitted at once);
-    a job whose worker died (:class:`WorkerLost`) is submitted again, at most ``retries``
-    times, so a deterministic job costs time, not the run. ``progress(done, total)`` as
-    jobs finish (in order)."""
-    jobs = list(jobs)
-    if executor is None:
-        out = []
-        for job in jobs:
-            out.append(fn(*job))
-            if progress:
-                progress(len(out), len(jobs))
-        return out
-    futures = [executor.submit(fn, *job) for job in jobs]
+def run_calls(executor, calls, *, retries: int = 2, progress=None) -> list:
+    """``[fn(*args) for fn, args in calls]``, on ``executor`` when given (all submitted at
+    once), else one after the other. A call whose worker died (:class:`WorkerLost`) is
+    submitted again, at most ``retries`` times, so a deterministic call costs time, not
+    the run. ``progress(done, total)`` as calls finish (in order)."""
+    calls = list(calls)
+    futures = None if executor is None else [executor.submit(fn, *args) for fn, args in calls]
     out = []
-    for job, fut in zip(jobs, futures, strict=True):
-        for attempt in range(retries + 1):
-            try:
-                out.append(fut.result())
-                break
-            except WorkerLost:
-                if attempt == retries:
-                    raise
-                fut = executor.submit(fn, *job)
+    for k, (fn, args) in enumerate(calls):
+        if futures is None:
+            out.append(fn(*args))
+        else:
+            out.append(_result(executor, futures[k], fn, args, retries))
         if progress:
-            progress(len(out), len(jobs))
+            progress(len(out), len(calls))
     return out
+
+
+def _result(executor, fut, fn, args, retries: int):
+    for attempt in range(retries + 1):
+        try:
+            return fut.result()
+        except WorkerLost:
+            if attempt == retries:
+                raise
+            fut = executor.submit(fn, *args)
+        except BrokenExecutor as exc:
+            raise ExecutorBroken(
+                f"the executor broke ({type(exc).__name__}: a worker process died); a "
+                "placement.WorkerPool survives dead workers"
+            ) from None
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def run_jobs(executor, fn, jobs, *, retries: int = 2, progress=None) -> list:
+    """``[fn(*job) for job in jobs]`` by :func:`run_calls`."""
+    return run_calls(executor, [(fn, tuple(job)) for job in jobs], retries=retries,
+                     progress=progress)  # fmt: skip
+
+
+def executor_workers(executor) -> int:
+    """Worker processes of an executor: its ``_max_workers`` when it has one, else the
+    machine's cores; 1 without an executor."""
+    if executor is None:
+        return 1
+    n = getattr(executor, "_max_workers", None)
+    return int(n) if n else (os.cpu_count() or 2)

@@ -32,7 +32,9 @@ import numpy as np
 from simulation import checks
 
 __all__ = [
+    "COST_UNITS",
     "STATISTICS",
+    "cost_unit",
     "axis_errors",
     "dop",
     "dop_rms",
@@ -117,6 +119,14 @@ STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
     "p95": _strict(lambda e: float(np.percentile(e, PERCENTILE))),
     "rms": _strict(lambda e: float(np.sqrt(np.mean(e * e)))),
 }
+
+#: the unit of a cost by its name: the statistics above and the mean PEB ("peb", m)
+COST_UNITS = {"variance": "m²", "mean": "m", "p95": "m", "rms": "m", "peb": "m"}
+
+
+def cost_unit(name) -> str:
+    """The unit of a cost by its name (:data:`COST_UNITS`), "" for a user's callable."""
+    return COST_UNITS.get(str(name).lower(), "")
 
 
 # -- per node -----------------------------------------------------------------------------------

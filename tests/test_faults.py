@@ -281,3 +281,14 @@ def test_run_jobs_resubmits_a_job_whose_worker_died(tmp_path):
     with WorkerPool(max_workers=2) as pool:
         out = run_jobs(pool, _die_once, [(marker, 1), (marker, 2), (marker, 3)])
     assert out == [2, 4, 6]
+
+
+def test_run_jobs_on_a_plain_pool_that_breaks_raises_executor_broken(tmp_path):
+    from concurrent.futures import ProcessPoolExecutor
+
+    from placement.workers import ExecutorBroken, run_jobs
+
+    marker = str(tmp_path / "marker")
+    with ProcessPoolExecutor(max_workers=1) as pool:
+        with pytest.raises(ExecutorBroken, match="WorkerPool"):
+            run_jobs(pool, _die_once, [(marker, 1)])

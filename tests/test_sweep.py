@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import placement
+from placement.anchor_sweep import sweep
 from placement.cli import main
 from placement.cli.sweep import parse_counts
 from placement.simselect import SearchOptions
-from placement.sweep import sweep
 from placement.validation import ValidationOptions
 from simulation import Room
 
@@ -71,3 +71,9 @@ def test_sweep_report_renders(tmp_path):
     (tmp_path / "sweep.json").write_text(res.to_json())
     page = write_sweep_report(tmp_path).read_text()
     assert "Recommended: M = 4" in page and "data:image/png;base64," in page
+
+
+def test_placement_sweep_is_the_function():
+    from placement.anchor_sweep import sweep as fn
+
+    assert placement.sweep is fn and callable(placement.sweep)

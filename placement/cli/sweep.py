@@ -50,7 +50,7 @@ def parse_counts(text: str) -> list[int]:
 def run(args) -> int:
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
-    from placement.sweep import sweep
+    from placement.anchor_sweep import sweep
 
     out = output_dir("--out", args.out)
     room = load_room(args.room)

@@ -121,8 +121,7 @@ def sweep(
         passes through to :func:`placement.seed_then_pso`, as its other keywords).
     """
     from placement.plan import _search_options, seed_then_pso
-    from placement.simselect import new_points, search_table
-    from placement.surfaces import candidate_grid
+    from placement.simselect import search_candidates, search_table
 
     room = as_room(room)
     counts = _counts(anchors)
@@ -139,7 +138,7 @@ def sweep(
         kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
         and kw.get("seeds", "auto") == "auto"
     ):
-        n = len(new_points(np.empty((0, 3)), candidate_grid(room, search.spacing)))
+        n = len(search_candidates(room, search.spacing))
         if n < max(counts):
             raise ValueError(
                 f"anchors: {max(counts)} anchors exceed the {n} candidate points "
