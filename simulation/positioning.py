@@ -2,7 +2,8 @@
 
 For each node, minimize F(x) = ½ Σ_j (‖x − a_j‖ − ρ_j)² over x ∈ ℝ³ with a damped
 Gauss–Newton method (Levenberg–Marquardt with Nielsen's damping update, per-node damping,
-a fixed maximum number of iterations, explicit 3 × 3 solves), all nodes at once in numpy.
+a fixed maximum number of iterations, explicit 3 × 3 solves). The loop over nodes is
+compiled (numba): every node is solved on its own, in one pass over the batch.
 An undamped Gauss–Newton diverges on the outlier ranges of a reverberant room.
 
 Start: the linear least-squares solution of the squared-range differences (subtracting
@@ -19,8 +20,10 @@ iterate is returned and flagged, never silently).
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from simulation import checks
@@ -84,54 +87,27 @@ def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _linear_solution(a: np.ndarray, ranges: np.ndarray, owner: np.ndarray | None = None):
-    """Linear LS solutions (B, 3) of the squared-range differences for ranges (B, M), and
-    whether the anchors are not coplanar (a bool, or (B,) when ``owner`` maps each row to
-    its layout of anchors a (L, M, 3))."""
-    if owner is not None:  # layout by layout: the same arithmetic as for one layout alone
-        lin, ok = np.empty((len(ranges), 3)), np.empty(len(ranges), dtype=bool)
-        for layout in range(len(a)):
-            rows = owner == layout
-            lin[rows], ok[rows] = _linear_solution(a[layout], ranges[rows])
-        return lin, ok
-    A = 2.0 * (a - a.mean(axis=0))  # (M, 3)
-    sv = np.linalg.svd(A, compute_uv=False)
-    a2 = np.sum(a * a, axis=1)
-    b = (a2 - a2.mean()) - (ranges * ranges - np.mean(ranges * ranges, axis=-1, keepdims=True))
-    return b @ np.linalg.pinv(A).T, bool(sv[-1] > 1e-9 * max(sv[0], 1e-300))
+def _linear_solution(a: np.ndarray, ranges: np.ndarray):
+    """Linear LS solutions (B, 3) of the squared-range differences for ranges (B, M) of
+    the layouts a (L, M, 3), B/L consecutive rows per layout, and whether each row's
+    anchors are not coplanar (B,)."""
+    L, M, _ = a.shape
+    A = 2.0 * (a - a.mean(axis=1, keepdims=True))  # (L, M, 3)
+    sv = np.linalg.svd(A, compute_uv=False)  # (L, 3)
+    a2 = np.sum(a * a, axis=2)  # (L, M)
+    r2 = ranges.reshape(L, -1, M) ** 2
+    b = (a2 - a2.mean(axis=1, keepdims=True))[:, None] - (r2 - r2.mean(axis=2, keepdims=True))
+    lin = b @ np.swapaxes(np.linalg.pinv(A), 1, 2)  # (L, B/L, 3)
+    ok = sv[:, -1] > 1e-9 * np.maximum(sv[:, 0], 1e-300)
+    return lin.reshape(-1, 3), np.repeat(ok, r2.shape[1])
 
 
 def linear_start(anchors: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
     """Linear LS solution (B, 3) of the squared-range differences, None if anchors coplanar."""
-    lin, ok = _linear_solution(anchors, ranges)
-    return lin if ok else None
-
-
-def _geometry(x, a, rho):
-    """Residuals (B, M) and unit vectors [3 × (B, M)] from anchors to points x [3 × (B,)];
-    anchor coordinates a [3 × (B or 1, M)]. Component arrays keep the loop memory-light."""
-    d = [x[k][:, None] - a[k] for k in range(3)]
-    dist = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    inv = 1.0 / np.where(dist > 0, dist, 1.0)
-    return dist - rho, [dk * inv for dk in d]
-
-
-def _solve_sym3(s00, s01, s02, s11, s12, s22, b0, b1, b2):
-    """Solve symmetric positive-definite 3 × 3 systems, given by their six distinct
-    entries (B,), for right-hand sides (b0, b1, b2) (B,) by cofactors."""
-    c00 = s11 * s22 - s12 * s12
-    c01 = s02 * s12 - s01 * s22
-    c02 = s01 * s12 - s02 * s11
-    c11 = s00 * s22 - s02 * s02
-    c12 = s01 * s02 - s00 * s12
-    c22 = s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
-    det = np.where(det != 0, det, np.finfo(float).tiny)
-    return [
-        (c00 * b0 + c01 * b1 + c02 * b2) / det,
-        (c01 * b0 + c11 * b1 + c12 * b2) / det,
-        (c02 * b0 + c12 * b1 + c22 * b2) / det,
-    ]
+    a = np.asarray(anchors, dtype=float)
+    R = np.asarray(ranges, dtype=float).reshape(-1, a.shape[0])
+    lin, ok = _linear_solution(a[None], R)
+    return lin if np.all(ok) else None
 
 
 def locate(
@@ -178,18 +154,18 @@ def locate(
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
-    owner, lo, hi, anc = _rows(a, len(R), region)
-    x = _start(a, R, owner, lo, hi, x0, lead)
+    layouts = a.reshape(-1, M, 3)
+    owner, lo, hi = _rows(layouts, len(R), region)
+    x = _start(layouts, R, owner, lo, hi, x0, lead)
     if bounded:
         x = np.clip(x, lo, hi)
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
-        anc, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
+        layouts, owner, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
     )
-    rank = np.asarray(checks.anchor_rank(a))
-    if np.any(rank < 2):  # collinear: rotation about the anchor line leaves ranges unchanged
-        bad = (rank < 2) if owner is None else (rank < 2)[owner]
-        status[np.broadcast_to(bad, status.shape)] = -1
+    rank = np.atleast_1d(checks.anchor_rank(layouts))
+    # collinear: rotation about the anchor line leaves the ranges unchanged
+    status[(rank < 2)[owner]] = -1
     converged = status > 0
     if not np.all(converged):
         logger.debug(
@@ -242,17 +218,16 @@ def _check_input(anchors, ranges, max_iter, tols, flags) -> tuple[np.ndarray, np
 
 
 def _rows(a: np.ndarray, B: int, region):
-    """Per-row layout owner (B,) or None, the region's bounds (per row when several
-    layouts share no region) and the anchor coordinates as [3 × (B or 1, M)]."""
-    if a.ndim == 2:
-        lo, hi = _region(a, region)
-        return None, lo, hi, [a[None, :, k] for k in range(3)]
-    owner = np.repeat(np.arange(a.shape[0]), B // a.shape[0])
+    """The layout (B,) of each row of ranges for layouts a (L, M, 3), and the bounds of
+    the region (B, 3) each row lies in (each layout's bounding box when ``region`` is
+    None)."""
+    owner = np.repeat(np.arange(len(a)), B // len(a))
     if region is None:
         lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
     else:
         lo, hi = _region(a[0], region)
-    return owner, lo, hi, [np.ascontiguousarray(a[owner, :, k]) for k in range(3)]
+        lo, hi = np.broadcast_to(lo, (B, 3)), np.broadcast_to(hi, (B, 3))
+    return owner, lo, hi
 
 
 def _start(a, R, owner, lo, hi, x0, lead) -> np.ndarray:
@@ -268,118 +243,144 @@ def _start(a, R, owner, lo, hi, x0, lead) -> np.ndarray:
         if not np.all(np.isfinite(x)):
             raise ValueError("x0: must be finite")
         return x
-    x = np.broadcast_to((lo + hi) / 2, (B, 3)).copy()
-    lin, ok = _linear_solution(a, R, owner)
+    x = (lo + hi) / 2
+    if B == 0:
+        return x
+    lin, ok = _linear_solution(a, R)
     inside = ok & np.all((lin >= lo) & (lin <= hi), axis=1)
     x[inside] = lin[inside]
     return x
 
 
-def _levenberg_marquardt(anc, R, x, lo, hi, bounded, max_iter, tols):
-    """Damped Gauss–Newton (Levenberg–Marquardt, Nielsen's damping update) on every row
-    at once: ranges R (B, M), anchors [3 × (B or 1, M)], starts x (B, 3). Returns the
-    positions (B, 3), costs ½Σr² (B,), statuses (B,) and iterations (B,). Finished rows
-    leave the working set, so the loop runs on the still-active rows only."""
-    xtol, ftol, gtol = tols
+def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
+    """Damped Gauss–Newton (Levenberg–Marquardt, Nielsen's damping update) on every row:
+    ranges R (B, M), anchors a (L, M, 3) with row b's layout ``owner[b]``, starts x (B, 3)
+    and bounds lo, hi (B, 3). Returns the positions (B, 3), costs ½Σr² (B,), statuses (B,)
+    and iterations (B,)."""
     B = len(R)
-    per_row = anc[0].shape[0] == B and B > 1
-    xs = [x[:, k].copy() for k in range(3)]
-    r, _ = _geometry(xs, anc, R)
-    cost = 0.5 * np.sum(r * r, axis=1)
-    status = np.zeros(B, dtype=np.int8)
-    nit = np.zeros(B, dtype=np.int32)
-    status[cost == 0] = 4
-    idx = np.flatnonzero(status == 0)
-    s = _State(
-        [v[idx] for v in xs], *_geometry([v[idx] for v in xs], _take(anc, idx, per_row), R[idx])
-    )
-    s.cost, s.rho = cost[idx], R[idx]
-    s.anc = _take(anc, idx, per_row)
-    s.lo, s.hi = (lo[idx], hi[idx]) if lo.ndim == 2 else (lo, hi)
-    s.lam, s.nu = np.full(idx.size, 1e-3), np.full(idx.size, 2.0)
-    for it in range(1, max_iter + 1):
-        if idx.size == 0:
-            break
-        st = _lm_iteration(s, bounded, xtol, ftol, gtol)
-        fin = (st > 0) | (it == max_iter)
-        if np.any(fin):
-            j = idx[fin]
+    out = (np.empty((B, 3)), np.empty(B), np.zeros(B, dtype=np.int8), np.zeros(B, dtype=np.int32))
+    if B:
+        _lm_rows(
+            np.ascontiguousarray(a, dtype=float),
+            np.ascontiguousarray(owner, dtype=np.int64),
+            np.ascontiguousarray(R, dtype=float),
+            np.ascontiguousarray(x, dtype=float),
+            np.ascontiguousarray(np.broadcast_to(lo, (B, 3)), dtype=float),
+            np.ascontiguousarray(np.broadcast_to(hi, (B, 3)), dtype=float),
+            bool(bounded),
+            int(max_iter),
+            *(float(t) for t in tols),
+            *out,
+        )
+    return out
+
+
+@numba.njit(cache=True)
+def _residuals(x, a, rho, r, u):  # pragma: no cover - compiled
+    """Residuals r (M,) and unit vectors u (M, 3) from the anchors a (M, 3) to the point
+    x (3,) for ranges rho (M,); returns ½Σr²."""
+    cost = 0.0
+    for j in range(a.shape[0]):
+        d0, d1, d2 = x[0] - a[j, 0], x[1] - a[j, 1], x[2] - a[j, 2]
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        inv = 1.0 / dist if dist > 0 else 1.0
+        r[j] = dist - rho[j]
+        u[j, 0], u[j, 1], u[j, 2] = d0 * inv, d1 * inv, d2 * inv
+        cost += r[j] * r[j]
+    return 0.5 * cost
+
+
+@numba.njit(cache=True)
+def _damped_step(r, u, lam, step):  # pragma: no cover - compiled
+    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors; returns (g0, g1, g2) = Jᵀr."""
+    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
+    for j in range(r.shape[0]):
+        u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
+        s00 += u0 * u0
+        s01 += u0 * u1
+        s02 += u0 * u2
+        s11 += u1 * u1
+        s12 += u1 * u2
+        s22 += u2 * u2
+        g0 += r[j] * u0
+        g1 += r[j] * u1
+        g2 += r[j] * u2
+    s00 += lam
+    s11 += lam
+    s22 += lam
+    c00 = s11 * s22 - s12 * s12
+    c01 = s02 * s12 - s01 * s22
+    c02 = s01 * s12 - s02 * s11
+    c11 = s00 * s22 - s02 * s02
+    c12 = s01 * s02 - s00 * s12
+    c22 = s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    if det == 0:
+        det = 2.2250738585072014e-308
+    step[0] = -(c00 * g0 + c01 * g1 + c02 * g2) / det
+    step[1] = -(c01 * g0 + c11 * g1 + c12 * g2) / det
+    step[2] = -(c02 * g0 + c12 * g1 + c22 * g2) / det
+    return g0, g1, g2
+
+
+@numba.njit(cache=True)
+def _lm_rows(
+    a, owner, R, x0, lo, hi, bounded, max_iter, xtol, ftol, gtol, xs, costs, status, nit
+):  # pragma: no cover - compiled
+    """The Levenberg–Marquardt loop of every row (module docstring), written into
+    xs (B, 3), costs (B,), status (B,) and nit (B,)."""
+    M = R.shape[1]
+    r, u = np.empty(M), np.empty((M, 3))
+    rn, un = np.empty(M), np.empty((M, 3))
+    x, xn, step = np.empty(3), np.empty(3), np.empty(3)
+    for b in range(R.shape[0]):
+        ab, rho = a[owner[b]], R[b]
+        x[:] = x0[b]
+        cost = _residuals(x, ab, rho, r, u)
+        st, it = np.int8(4 if cost == 0 else 0), 0
+        lam, nu = 1e-3, 2.0
+        while st == 0 and it < max_iter:
+            it += 1
+            g0, g1, g2 = _damped_step(r, u, lam, step)
+            small_g = max(abs(g0), abs(g1), abs(g2)) <= gtol
             for k in range(3):
-                xs[k][j] = s.x[k][fin]
-            cost[j], status[j], nit[j] = s.cost[fin], st[fin], it
-            idx = idx[~fin]
-            s.keep(~fin, per_row, lo.ndim == 2)
-    return np.stack(xs, axis=-1), cost, status, nit
-
-
-def _take(anc, idx, per_row):
-    return [v[idx] for v in anc] if per_row else anc
-
-
-class _State:
-    """The active rows of the Levenberg–Marquardt loop."""
-
-    def __init__(self, x, r, u):
-        self.x, self.r, self.u = x, r, u
-
-    def keep(self, mask, per_row: bool, row_bounds: bool) -> None:
-        self.x = [v[mask] for v in self.x]
-        self.u = [v[mask] for v in self.u]
-        self.r, self.cost, self.rho = self.r[mask], self.cost[mask], self.rho[mask]
-        self.lam, self.nu = self.lam[mask], self.nu[mask]
-        if per_row:
-            self.anc = [v[mask] for v in self.anc]
-        if row_bounds:
-            self.lo, self.hi = self.lo[mask], self.hi[mask]
-
-
-def _lm_iteration(s: _State, bounded: bool, xtol, ftol, gtol) -> np.ndarray:
-    """One damped step on every active row; updates ``s`` and returns each row's status
-    (0 still running, else the convergence code of :data:`STATUS_MESSAGES`)."""
-    u, lam = s.u, s.lam
-    g = [np.sum(s.r * uk, axis=1) for uk in u]  # Jᵀr
-    small_g = np.maximum(np.maximum(np.abs(g[0]), np.abs(g[1])), np.abs(g[2])) <= gtol
-    step = _solve_sym3(
-        np.sum(u[0] * u[0], axis=1) + lam,
-        np.sum(u[0] * u[1], axis=1),
-        np.sum(u[0] * u[2], axis=1),
-        np.sum(u[1] * u[1], axis=1) + lam,
-        np.sum(u[1] * u[2], axis=1),
-        np.sum(u[2] * u[2], axis=1) + lam,
-        -g[0],
-        -g[1],
-        -g[2],
-    )
-    xn = [s.x[k] + step[k] for k in range(3)]
-    if bounded:
-        xn = [np.clip(xn[k], s.lo[..., k], s.hi[..., k]) for k in range(3)]
-        step = [xn[k] - s.x[k] for k in range(3)]
-    rn, un = _geometry(xn, s.anc, s.rho)
-    cn = 0.5 * np.sum(rn * rn, axis=1)
-    # predicted reduction of the damped model: ½ δᵀ(λδ − g)
-    pred = 0.5 * sum(step[k] * (lam * step[k] - g[k]) for k in range(3))
-    actual = s.cost - cn
-    ratio = np.where(pred > 0, actual / np.where(pred > 0, pred, 1.0), -1.0)
-    ok = (ratio > 0) & np.isfinite(cn)
-    # convergence tests (gradient before the step; step, cost change after it)
-    snorm = np.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2])
-    xnorm = np.sqrt(s.x[0] * s.x[0] + s.x[1] * s.x[1] + s.x[2] * s.x[2])
-    small_x = snorm <= xtol * (xnorm + xtol)
-    small_f = ok & (actual <= ftol * s.cost) & (pred <= ftol * s.cost)
-    zero = ok & (cn == 0)
-    # accept / reject with Nielsen's damping update
-    s.x = [np.where(ok, xn[k], s.x[k]) for k in range(3)]
-    s.r = np.where(ok[:, None], rn, s.r)
-    s.u = [np.where(ok[:, None], un[k], u[k]) for k in range(3)]
-    s.cost = np.where(ok, cn, s.cost)
-    fac = np.maximum(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
-    s.lam = np.where(ok, lam * fac, lam * s.nu)
-    s.nu = np.where(ok, 2.0, 2.0 * s.nu)
-    st = np.zeros(len(ok), dtype=np.int8)
-    st[small_g] = 1
-    st[small_f & (st == 0)] = 2
-    st[small_x & (st == 0)] = 3
-    st[zero] = 4
-    # a damping that overflows means no descent direction is left: stationary point
-    st[(st == 0) & ~np.isfinite(s.lam * 1e3)] = 1
-    return st
+                xn[k] = x[k] + step[k]
+                if bounded:
+                    xn[k] = min(max(xn[k], lo[b, k]), hi[b, k])
+                    step[k] = xn[k] - x[k]
+            cn = _residuals(xn, ab, rho, rn, un)
+            # predicted reduction of the damped model: ½ δᵀ(λδ − g)
+            pred = 0.5 * (
+                step[0] * (lam * step[0] - g0)
+                + step[1] * (lam * step[1] - g1)
+                + step[2] * (lam * step[2] - g2)
+            )
+            actual = cost - cn
+            ratio = actual / pred if pred > 0 else -1.0
+            ok = ratio > 0 and math.isfinite(cn)
+            snorm = math.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2])
+            xnorm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+            small_x = snorm <= xtol * (xnorm + xtol)
+            small_f = ok and actual <= ftol * cost and pred <= ftol * cost
+            # accept / reject with Nielsen's damping update
+            if ok:
+                x[:], r[:], u[:, :] = xn, rn, un
+                cost = cn
+                lam *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
+                nu = 2.0
+            else:
+                lam *= nu
+                nu *= 2.0
+            if small_g:
+                st = 1
+            elif small_f:
+                st = 2
+            elif small_x:
+                st = 3
+            if ok and cn == 0:
+                st = 4
+            # a damping that overflows means no descent direction is left: stationary point
+            if st == 0 and not math.isfinite(lam * 1e3):
+                st = 1
+        xs[b] = x
+        costs[b], status[b], nit[b] = cost, st, it

@@ -117,3 +117,26 @@ def test_several_layouts_at_once_match_one_by_one():
             np.testing.assert_allclose(both[i], locate(anchors[i], ranges[i], **kw), atol=1e-6)
     with pytest.raises(ValueError, match="layouts"):
         locate(anchors, ranges[:1])
+
+
+def test_each_node_is_solved_as_if_alone():
+    """A node's fix, iterations and status do not depend on the other rows of the batch
+    (damping and state restart for every node), and a converged fix is a stationary point
+    of F: its gradient Jᵀr vanishes."""
+    rng = np.random.default_rng(7)
+    a = random_layout(ROOM, 6, rng=rng)
+    nodes = ROOM.grid()[::5]
+    ranges = _ranges(a, nodes) + rng.normal(0, 0.05, (len(nodes), 6))
+    ranges[::4, 0] += 2.0  # outliers make some nodes take many damped steps
+    x0 = np.array(ROOM.size) / 2  # the same start (a batched linear start may round apart)
+    fix = locate(a, ranges, region=REGION, x0=x0, full_output=True)
+    for p in (0, 3, len(nodes) - 1):
+        one = locate(a, ranges[p : p + 1], region=REGION, x0=x0, full_output=True)
+        assert np.array_equal(one.x[0], fix.x[p])
+        assert (one.nit[0], one.status[0]) == (fix.nit[p], fix.status[p])
+    d = fix.x[:, None, :] - a[None]
+    dist = np.linalg.norm(d, axis=-1)
+    grad = np.sum(((dist - ranges) / dist)[..., None] * d, axis=1)
+    ok = fix.converged
+    assert ok.mean() > 0.9
+    assert np.max(np.abs(grad[ok])) < 1e-5
