@@ -508,7 +508,7 @@ def seed_then_pso(
     iterations: int | None = None,
     mount_tolerance: float = 0.03,
     finalists: int = 1,
-    finalist_draws: int = 4,
+    finalist_draws: int = 8,
     validation: ValidationOptions | None = None,
     validate_realizations: int | None = None,
     realizations: int = 1,

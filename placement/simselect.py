@@ -220,7 +220,7 @@ class SearchOptions:
     draws: int = 3
     exact_draws: int = 2
     mount_tolerance: float = 0.03
-    chains: int = 2
+    chains: int = 8
     chain_draws: int | None = None
     random_starts: int = 30
     neighbours: int = 48
@@ -232,7 +232,7 @@ class SearchOptions:
     fine_steps: int = 1
     fine_neighbours: int = 8
     fine_optima: int = 1
-    keep: int = 3
+    keep: int = 4
     precision: str = "float32"
 
     def __post_init__(self) -> None:

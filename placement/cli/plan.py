@@ -59,7 +59,7 @@ def register(sub) -> None:
         help="best distinct swarm layouts scored, with the seeds and the refined layout, on "
         "fresh draws (1)",
     )
-    p.add_argument("--finalist-draws", type=int, default=4, help="fresh draws of the finalists (4)")
+    p.add_argument("--finalist-draws", type=int, default=8, help="fresh draws of the finalists (8)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
         "--workers",
