@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from analysis import figures as F
-from analysis.report import Context, Figure, _array
+from analysis.report_data import Context, Figure, _array
 from simulation.statistics import cost_unit
 
 logger = logging.getLogger(__name__)

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from analysis.report import EVALUATION_FILE, RESULT_FILE, Context, LayoutEntry
+from analysis.report_data import EVALUATION_FILE, RESULT_FILE, Context, LayoutEntry
 from simulation.room import SURFACES, Room
 from simulation.statistics import error_stats
 

@@ -43,7 +43,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from analysis.noise import SIGMA_RANGE
-    from analysis.report import load_results, main_anchors, room_of, write_report
+    from analysis.report import write_report
+    from analysis.report_data import load_results, main_anchors, room_of
     from placement.surfaces import naive_layout
 
     result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
