@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from placement.surfaces import mounting_surfaces, project, surface_index
+from placement.workers import run_jobs
 from simulation import checks
 from simulation.room import Room
 from simulation.statistics import STATISTICS
@@ -177,8 +178,6 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
 
 
 def _simulate(room, candidates, first_id: int, nodes, spec, executor, chunk, progress=None):
-    from placement.workers import run_jobs
-
     ids = np.arange(first_id, first_id + len(candidates))
     args = [
         (room, candidates[i : i + chunk], ids[i : i + chunk], nodes, spec)
@@ -270,11 +269,15 @@ def _fixes(table: RangeTable, layouts):
     return locate(table.candidates[S], ranges, region=table.region, full_output=True)
 
 
+def _errors(table: RangeTable, fix) -> np.ndarray:
+    """(L, D·P) Euclidean errors (m) of the fixes of L layouts at the table's nodes."""
+    return np.linalg.norm(fix.x - table.nodes, axis=-1).reshape(len(fix.x), -1)
+
+
 def table_errors(table: RangeTable, layouts) -> np.ndarray:
     """(L, D·P) Euclidean position errors (m) of layouts of candidates ``layouts`` (L, M)
     indices over every draw and node of the table, positioned in one batch."""
-    x = _fixes(table, layouts).x
-    return np.linalg.norm(x - table.nodes, axis=-1).reshape(len(x), -1)
+    return _errors(table, _fixes(table, layouts))
 
 
 def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
@@ -282,7 +285,7 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     entries (:func:`table_errors`); +inf for a layout where some fix is not finite or
     whose anchors are collinear (``locate``'s status −1)."""
     fix = _fixes(table, layouts)
-    e = np.linalg.norm(fix.x - table.nodes, axis=-1).reshape(len(fix.x), -1)
+    e = _errors(table, fix)
     # collinear or coincident anchors leave the position undetermined: never a solution
     fixed = ~np.any(fix.status.reshape(len(e), -1) == -1, axis=1)
     stat = STATISTICS[statistic]

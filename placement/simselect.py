@@ -37,6 +37,7 @@ import numpy as np
 from placement.rangetable import RangeTable, extend_table, range_table, table_costs
 from placement.result import LayoutResult
 from placement.surfaces import candidate_grid, mounting_surfaces, project, surface_index
+from placement.workers import run_jobs
 from simulation import checks
 from simulation.room import Room
 
@@ -311,12 +312,6 @@ def _descents(table, statistic, nbr, layouts, seed, key):
     return out
 
 
-def _map(executor, fn, jobs):
-    from placement.workers import run_jobs
-
-    return run_jobs(executor, fn, jobs)
-
-
 def _split(items: list, parts: int) -> list[list]:
     return [items[i::parts] for i in range(parts) if items[i::parts]]
 
@@ -346,14 +341,14 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     for seg in range(1, SEGMENTS + 1):
         until = opt.evaluations * seg // SEGMENTS
         jobs = [(view, statistic, nbr, opt, [chains[k] for k in ks], until) for ks in parts]
-        for ks, done in zip(parts, _map(executor, _advance, jobs), strict=True):
+        for ks, done in zip(parts, run_jobs(executor, _advance, jobs), strict=True):
             for k, c in zip(ks, done, strict=True):
                 chains[k] = c
         if progress:
             progress("search", seg, SEGMENTS + 1)
     near = nbr[:, : opt.finish_neighbours]
     jobs = [(table, statistic, near, [(k, chains[k]) for k in ks], seed) for ks in parts]
-    found = [r for part in _map(executor, _finish, jobs) for r in part]
+    found = [r for part in run_jobs(executor, _finish, jobs) for r in part]
     if progress:
         progress("search", SEGMENTS + 1, SEGMENTS + 1)
     return found
@@ -409,7 +404,7 @@ def simulated_select(
     executor, workers : the chains run as ``workers`` jobs on ``executor``; the result
         does not depend on either.
     progress : an optional callable ``progress(stage, done, total)`` reporting the search
-        ("search", then "fine") as it goes.
+        (stage "search") as it goes.
     """
     opt = options or SearchOptions()
     M = checks.count("M", M, low=4, high=1000)
@@ -424,8 +419,7 @@ def simulated_select(
     found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
-    t3 = time.perf_counter()
-    return _selection(table, statistic, found, nfev, (t0, t1, t2, t3))
+    return _selection(table, statistic, found, nfev, (t0, t1, t2))
 
 
 def _indices(table: RangeTable, anchors: np.ndarray) -> np.ndarray:
@@ -463,13 +457,13 @@ def refine_on_table(
         table = extend_table(room, table, new_points(table.candidates, points), executor=executor)
         nbr = nearest(table.candidates, opt.fine_neighbours)
         starts = [_indices(table, a) for a in current]
+        parts = _split(list(range(len(starts))), max(1, workers))
         jobs = [
             (table, statistic, nbr, [(i, starts[i]) for i in part], seed, 30 + level)
-            for part in _split(list(range(len(starts))), max(1, workers))
+            for part in parts
         ]
-        parts = _split(list(range(len(starts))), max(1, workers))
         done: list = [None] * len(starts)
-        for part, res in zip(parts, _map(executor, _descents, jobs), strict=True):
+        for part, res in zip(parts, run_jobs(executor, _descents, jobs), strict=True):
             for i, r in zip(part, res, strict=True):
                 done[i] = r
         out = [(table.candidates[S], f, local) for S, f, local, _ in done]
