@@ -1,0 +1,172 @@
+"""How good can the choice among the planner's candidates be? The ceiling of the finalists.
+
+For each M and seed, builds the run's range table as ``seed_then_pso(room, M, rng=seed)``
+does (same streams, default :class:`~placement.simselect.SearchOptions`), takes the
+search's ``--keep`` best distinct optima and the table refinement of its two best
+(:func:`~placement.simselect.refine_on_table`), and validates every candidate on the
+run's own validation draws (the plan's defaults: R = 100 at the 270 nodes, held-out grid
+and random points, 3 cm mounting error). Each candidate is also scored on ``--draws``
+fresh scene draws (half at the exact nodes, half moved), kept per draw, so that choice
+rules can be compared afterwards without simulating again.
+
+One JSON line per candidate (``bench: "candidate"``), then one per (M, seed) with the
+candidate chosen by each rule (``bench: "choice"``):
+- ``table``: the lowest table cost (the search's answer);
+- ``fresh_k``: the lowest variance over the first k exact and the first k moved fresh
+  draws (k = ``--draws`` / 4: the plan's finalists; k = ``--draws`` / 2: all draws);
+- ``exact_k``, ``exact``: the lowest variance over the first k or all exact fresh draws;
+- ``oracle``: the lowest validated σ at the 270 nodes, which no rule can beat.
+The spread of σ over seeds under the oracle bounds what any choice among these candidates
+can reach.
+
+Run: python benchmarks/bench_candidates.py [--anchors 8 4] [--seeds 5] [--keep 8]
+     [--draws 16] [--workers 2] > candidates.jsonl
+Tables: python benchmarks/bench_candidates.py --summary candidates.jsonl
+"""
+
+import argparse
+import json
+
+import numpy as np
+from _common import emit
+
+from placement.costs import DrawsCost
+from placement.rangetable import node_draws
+from placement.simselect import SearchOptions, refine_on_table, search_table, simulated_select
+from placement.validation import validate_layout
+from placement.workers import WorkerPool, run_calls
+from simulation import Room, checks
+
+
+def _candidates(room, M, seed, keep, ex, workers):
+    """[(name, anchors, table cost)]: the search's optima and the refined two best."""
+    opt = SearchOptions()
+    table = search_table(room, opt, None, checks.substream(seed, 1), ex)
+    sel = simulated_select(
+        room, M, options=opt, table=table, rng=checks.substream(seed, 3), executor=ex,
+        workers=workers,
+    )  # fmt: skip
+    layouts = sel.layouts(keep)
+    costs = [c for _, c in sel.optima[: len(layouts)]]
+    out = [(f"search-{k + 1}", a, c) for k, (a, c) in enumerate(zip(layouts, costs, strict=True))]
+    refined, _, _ = refine_on_table(
+        room, table, layouts[:2], options=opt, rng=checks.substream(seed, 7), executor=ex,
+        workers=workers,
+    )  # fmt: skip
+    out += [(f"refined-{k + 1}", a, f) for k, (a, f, _) in enumerate(refined)]
+    return out
+
+
+def _fresh_moments(room, anchors, seed, draws):
+    """(2, draws) mean and mean square of the errors (m, m²) on each fresh draw."""
+    exact = draws // 2
+    sets = node_draws(room, room.grid(), draws, exact, checks.substream(seed, 6))
+    cost = DrawsCost(
+        room, sets, exact_draws=exact, mount_tolerance=0.03, seed=checks.substream(seed, 5)
+    )
+    e = cost.errors(anchors).reshape(draws, -1)
+    return np.stack([e.mean(axis=1), (e**2).mean(axis=1)])
+
+
+def _candidate(room, anchors, seed, draws):
+    v = validate_layout(room, anchors, rng=checks.substream(seed, 4), mount_tolerance=0.03)
+    m = _fresh_moments(room, anchors, seed, draws)
+    return {
+        "std": v["std"],
+        "p95": v["p95"],
+        "held_out_grid": v["held_out"]["grid"]["std"],
+        "held_out_random": v["held_out"]["random"]["std"],
+        "mounting": v["mounting"]["std"],
+        "fresh_mean": m[0].tolist(),
+        "fresh_meansq": m[1].tolist(),
+    }
+
+
+def _variance(c, idx) -> float:
+    m, q = np.asarray(c["fresh_mean"])[idx], np.asarray(c["fresh_meansq"])[idx]
+    return float(q.mean() - m.mean() ** 2)
+
+
+def _choices(cands, draws) -> dict:
+    half = draws // 2
+    exact, moved = list(range(half)), list(range(half, draws))
+    rules = {"table": lambda c: c["table_cost"]}
+    for k in sorted({half // 2, half}):
+        rules[f"fresh_{k}"] = lambda c, k=k: _variance(c, exact[:k] + moved[:k])
+    rules[f"exact_{half // 2}"] = lambda c: _variance(c, exact[: half // 2])
+    rules["exact"] = lambda c: _variance(c, exact)
+    rules["oracle"] = lambda c: c["std"]
+    out = {}
+    for name, key in rules.items():
+        c = min(cands, key=key)
+        out[name] = {k: c[k] for k in ("candidate", "std", "p95", "held_out_grid")}
+    return out
+
+
+def summary(path: str) -> None:
+    """Print, per M and rule, each seed's choice (σ / P95 at the 270 nodes, held-out grid σ),
+    the spread of σ over seeds (max − min over the median) and in how many seeds the choice
+    validates below the search's best layout (``search-1``), as a markdown table; the row
+    "any" counts the seeds where some candidate does."""
+    rows = [json.loads(line) for line in open(path)]
+    cands = [r for r in rows if r["bench"] == "candidate"]
+    keys = sorted({(r["M"], r["seed"]) for r in cands})
+    draws = len(cands[0]["fresh_mean"])
+    choices = [
+        {
+            "M": M,
+            "seed": seed,
+            **_choices([c for c in cands if (c["M"], c["seed"]) == (M, seed)], draws),
+        }
+        for M, seed in keys
+    ]
+    first = {(r["M"], r["seed"]): r["std"] for r in cands if r["candidate"] == "search-1"}
+    best = {(r["M"], r["seed"]): r["oracle"]["std"] for r in choices}
+    print("| M | rule | σ / P95 (held-out grid σ) per seed (m) | candidate per seed "
+          "| spread of σ | below search-1 |")  # fmt: skip
+    print("|---|---|---|---|---|---|")
+    for M in sorted({r["M"] for r in choices}):
+        runs = sorted((r for r in choices if r["M"] == M), key=lambda r: r["seed"])
+        for rule in [k for k in runs[0] if k not in ("M", "seed")]:
+            picks = [r[rule] for r in runs]
+            sd = [p["std"] for p in picks]
+            cells = ", ".join(
+                f"{p['std']:.3f} / {p['p95']:.3f} ({p['held_out_grid']:.3f})" for p in picks
+            )
+            names = ", ".join(p["candidate"] for p in picks)
+            spread = (max(sd) - min(sd)) / float(np.median(sd))
+            below = sum(p["std"] < first[(M, r["seed"])] for p, r in zip(picks, runs, strict=True))
+            n = len(runs)
+            print(f"| {M} | {rule} | {cells} | {names} | {100 * spread:.1f} % | {below} of {n} |")
+        below = sum(best[(M, r["seed"])] < first[(M, r["seed"])] for r in runs)
+        print(f"| {M} | any | | | | {below} of {len(runs)} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--anchors", type=int, nargs="+", default=[8, 4])
+    ap.add_argument("--seeds", type=int, default=5)
+    ap.add_argument("--keep", type=int, default=8)
+    ap.add_argument("--draws", type=int, default=16)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--summary", metavar="JSONL", help="print the tables of a finished run")
+    args = ap.parse_args()
+    if args.summary:
+        summary(args.summary)
+        return
+    room = Room.techtile()
+    with WorkerPool(args.workers) as ex:
+        for M in args.anchors:
+            for seed in range(args.seeds):
+                found = _candidates(room, M, seed, args.keep, ex, args.workers)
+                calls = [(_candidate, (room, a, seed, args.draws)) for _, a, _ in found]
+                cands = []
+                for (name, a, f), r in zip(found, run_calls(ex, calls), strict=True):
+                    c = {"candidate": name, "table_cost": float(f), **r}
+                    cands.append(c)
+                    emit("candidate", M=M, seed=seed, anchors=np.asarray(a).tolist(), **c)
+                emit("choice", M=M, seed=seed, **_choices(cands, args.draws))
+
+
+if __name__ == "__main__":
+    main()
