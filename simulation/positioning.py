@@ -265,8 +265,9 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
             np.ascontiguousarray(owner, dtype=np.int64),
             np.ascontiguousarray(R, dtype=float),
             np.ascontiguousarray(x, dtype=float),
-            np.ascontiguousarray(np.broadcast_to(lo, (B, 3)), dtype=float),
-            np.ascontiguousarray(np.broadcast_to(hi, (B, 3)), dtype=float),
+            # fresh writable copies: one compiled signature, whatever the caller passed
+            np.array(np.broadcast_to(lo, (B, 3)), dtype=float, order="C"),
+            np.array(np.broadcast_to(hi, (B, 3)), dtype=float, order="C"),
             bool(bounded),
             int(max_iter),
             *(float(t) for t in tols),

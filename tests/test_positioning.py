@@ -140,3 +140,17 @@ def test_each_node_is_solved_as_if_alone():
     ok = fix.converged
     assert ok.mean() > 0.9
     assert np.max(np.abs(grad[ok])) < 1e-5
+
+
+def test_one_compiled_loop_for_every_caller():
+    """The compiled loop has one signature whether the caller gives a region or not: a
+    process compiles it (or loads it from numba's cache) once."""
+    from simulation import positioning
+
+    rng = np.random.default_rng(3)
+    a = random_layout(ROOM, 5, rng=rng)
+    ranges = _ranges(a, ROOM.grid()[:7])
+    free = locate(a, ranges)
+    boxed = locate(a, ranges, region=REGION, bounded=True)
+    assert len(positioning._lm_rows.signatures) == 1
+    assert np.all(np.isfinite(free)) and np.all(np.isfinite(boxed))
