@@ -48,16 +48,24 @@ from analysis.report_data import (
     Context,
     Figure,
     Report,
-    _array,
-    _evaluator,
-    _sim_from_evaluation,
     collect_layouts,
+    json_array,
     load_results,
     room_of,
+    sim_from_evaluation,
 )
 from simulation import checks
 
 logger = logging.getLogger(__name__)
+
+
+def _evaluator():
+    """``simulation.evaluate_layout`` if the simulator is installed, else None."""
+    try:
+        import simulation
+    except ImportError:  # pragma: no cover - simulation is part of the distribution
+        return None
+    return getattr(simulation, "evaluate_layout", None)
 
 
 # -- simulation here -------------------------------------------------------------------------
@@ -86,7 +94,7 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
             continue
         t = time.perf_counter()
         ev = evaluate(ctx.room, e.anchors, realizations=R, rng=seed, nodes=ctx.nodes)
-        e.fresh = _sim_from_evaluation(ev, f"simulated for this report (R = {R})")
+        e.fresh = sim_from_evaluation(ev, f"simulated for this report (R = {R})")
         if e.sim is None:
             e.sim = e.fresh
         logger.info("simulated %s, R = %d, in %.1f s", e.name, R, time.perf_counter() - t)
@@ -150,7 +158,7 @@ def _context(result_dir, sigma, realizations: int, comparisons) -> Context:
     evaluation = data["evaluation"]
     room = room_of(data)
     nodes = (
-        _array(evaluation["nodes"], "evaluation nodes", 2)
+        json_array(evaluation["nodes"], "evaluation nodes", 2)
         if evaluation is not None and evaluation.get("nodes") is not None
         else room.grid()
     )

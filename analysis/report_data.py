@@ -6,7 +6,6 @@ context that the report's figures (:mod:`analysis.report_figures`) and HTML
 from __future__ import annotations
 
 import json
-import logging
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -18,8 +17,6 @@ import numpy as np
 from simulation import checks
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse
-
-logger = logging.getLogger(__name__)
 
 RESULT_FILE = "result.json"
 EVALUATION_FILE = "evaluation.json"
@@ -156,10 +153,10 @@ def room_of(data: dict[str, dict | None]) -> Room:
 def main_anchors(data: dict[str, dict | None]) -> np.ndarray:
     """(M, 3) the layout the report is about: the plan's, else the evaluated one."""
     main = data["result"] if data.get("result") is not None else data["evaluation"]
-    return _array(main["anchors"], "anchors", 2)
+    return json_array(main["anchors"], "anchors", 2)
 
 
-def _array(x, name: str, ndim: int | None = None) -> np.ndarray:
+def json_array(x, name: str, ndim: int | None = None) -> np.ndarray:
     """Float array from JSON lists (null → NaN)."""
     try:
         a = np.array(x, dtype=float)
@@ -186,7 +183,7 @@ def _per_node(per_node: dict, key: str, source: str, P: int) -> np.ndarray | Non
     v = per_node.get(key)
     if v is None:
         return None
-    a = _array(v, f"{source} per_node.{key}", 1)
+    a = json_array(v, f"{source} per_node.{key}", 1)
     if a.size != P:
         raise ValueError(f"{source} per_node.{key}: expected {P} values, got {a.size}")
     return a
@@ -199,7 +196,7 @@ def _sim_from_json(block: dict, P: int, R: int | None, source: str) -> Simulated
     files written since issue 15; before, ``dop`` held the RMS-based one)."""
     errors = block.get("errors")
     per_node = block.get("per_node") or {}
-    e = _array(errors, f"{source} errors", 2) if errors is not None else None
+    e = json_array(errors, f"{source} errors", 2) if errors is not None else None
     if e is not None and e.shape[1] != P:
         raise ValueError(f"{source} errors: expected (R, {P}) for {P} nodes, got {e.shape}")
     rmse = _per_node(per_node, "rmse", source, P)
@@ -215,7 +212,7 @@ def _sim_from_json(block: dict, P: int, R: int | None, source: str) -> Simulated
     return Simulated(e, rmse, d, d_rms, stats, R, source)
 
 
-def _sim_from_evaluation(ev, source: str) -> Simulated:
+def sim_from_evaluation(ev, source: str) -> Simulated:
     """Simulated from an :class:`simulation.Evaluation` (or anything with its arrays)."""
     errors = np.asarray(ev.errors, dtype=float)
     range_errors = np.asarray(ev.range_errors, dtype=float)
@@ -232,15 +229,6 @@ def _sim_from_evaluation(ev, source: str) -> Simulated:
     )
 
 
-def _evaluator():
-    """``simulation.evaluate_layout`` if the simulator is installed, else None."""
-    try:
-        import simulation
-    except ImportError:  # pragma: no cover - simulation is part of the distribution
-        return None
-    return getattr(simulation, "evaluate_layout", None)
-
-
 # -- the layouts ---------------------------------------------------------------------------
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and bool(np.allclose(a, b))
@@ -253,7 +241,7 @@ def _plan_layouts(result: dict, P: int) -> tuple[LayoutEntry, list[LayoutEntry]]
     cost = result.get("cost")
     best = LayoutEntry(
         "optimized",
-        _array(result["anchors"], "result anchors", 2),
+        json_array(result["anchors"], "result anchors", 2),
         "optimized",
         None if cost is None else float(cost),
         sim,
@@ -261,7 +249,7 @@ def _plan_layouts(result: dict, P: int) -> tuple[LayoutEntry, list[LayoutEntry]]
     seeds = []
     for i, s in enumerate(result.get("seeds") or []):
         c = s.get("cost")
-        anchors = _array(s["anchors"], f"seeds[{i}] anchors", 2)
+        anchors = json_array(s["anchors"], f"seeds[{i}] anchors", 2)
         name = f"seed {s.get('name', i + 1)}"
         seeds.append(LayoutEntry(name, anchors, "seed", None if c is None else float(c)))
     return best, seeds
@@ -270,7 +258,7 @@ def _plan_layouts(result: dict, P: int) -> tuple[LayoutEntry, list[LayoutEntry]]
 def _add_evaluation(out: list[LayoutEntry], evaluation: dict, P: int) -> None:
     """The evaluated layout: merged into the optimized one when it is the same layout
     (the larger sample becomes its main data), else a layout of its own."""
-    anchors = _array(evaluation["anchors"], "evaluation anchors", 2)
+    anchors = json_array(evaluation["anchors"], "evaluation anchors", 2)
     sim = _sim_from_json(evaluation, P, evaluation.get("realizations"), EVALUATION_FILE)
     if out and _same(out[0].anchors, anchors):
         if sim is not None and (out[0].sim is None or sim.realizations > out[0].sim.realizations):
@@ -282,8 +270,9 @@ def _add_evaluation(out: list[LayoutEntry], evaluation: dict, P: int) -> None:
 def _comparison(name: str, value) -> LayoutEntry:
     """A caller's comparison layout: anchors (M, 3), or an Evaluation of them."""
     if hasattr(value, "errors") and hasattr(value, "anchors"):
-        entry = LayoutEntry(name, _array(value.anchors, f"comparisons[{name!r}]", 2), "comparison")
-        entry.sim = entry.fresh = _sim_from_evaluation(value, f"given (R = {len(value.errors)})")
+        anchors = json_array(value.anchors, f"comparisons[{name!r}]", 2)
+        entry = LayoutEntry(name, anchors, "comparison")
+        entry.sim = entry.fresh = sim_from_evaluation(value, f"given (R = {len(value.errors)})")
         return entry
     anchors = checks.reals(f"comparisons[{name!r}]", value)
     if anchors.ndim != 2 or anchors.shape[1] != 3:

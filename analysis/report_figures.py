@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from analysis import figures as F
-from analysis.report_data import Context, Figure, _array
+from analysis.report_data import Context, Figure, json_array
 from simulation.statistics import cost_unit
 
 logger = logging.getLogger(__name__)
@@ -226,8 +226,8 @@ def _history(figs: _Figures) -> None:
     if not (result.get("history") and result.get("best_anchors_history")):
         ctx.notes.append("PSO evolution skipped: result.json has no history.")
         return
-    history = _array(result["history"], "history", 1)
-    bah = _array(result["best_anchors_history"], "best_anchors_history", 3)
+    history = json_array(result["history"], "history", 1)
+    bah = json_array(result["best_anchors_history"], "best_anchors_history", 3)
     T = min(len(history), len(bah))
     figs.add(
         "PSO evolution",

@@ -9,8 +9,8 @@ and random points, 3 cm mounting error). Each candidate is also scored on ``--dr
 fresh scene draws (half at the exact nodes, half moved), kept per draw, so that choice
 rules can be compared afterwards without simulating again.
 
-One JSON line per candidate (``bench: "candidate"``), then one per (M, seed) with the
-candidate chosen by each rule (``bench: "choice"``):
+One JSON line per candidate (``bench: "candidate"``). ``--summary`` then chooses, for
+each (M, seed), the candidate of each rule:
 - ``table``: the lowest table cost (the search's answer);
 - ``fresh_k``: the lowest variance over the first k exact and the first k moved fresh
   draws (k = ``--draws`` / 4: the plan's finalists; k = ``--draws`` / 2: all draws);
@@ -160,12 +160,9 @@ def main() -> None:
             for seed in range(args.seeds):
                 found = _candidates(room, M, seed, args.keep, ex, args.workers)
                 calls = [(_candidate, (room, a, seed, args.draws)) for _, a, _ in found]
-                cands = []
                 for (name, a, f), r in zip(found, run_calls(ex, calls), strict=True):
                     c = {"candidate": name, "table_cost": float(f), **r}
-                    cands.append(c)
                     emit("candidate", M=M, seed=seed, anchors=np.asarray(a).tolist(), **c)
-                emit("choice", M=M, seed=seed, **_choices(cands, args.draws))
 
 
 if __name__ == "__main__":

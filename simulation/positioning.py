@@ -261,19 +261,24 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
     out = (np.empty((B, 3)), np.empty(B), np.zeros(B, dtype=np.int8), np.zeros(B, dtype=np.int32))
     if B:
         _lm_rows(
-            np.ascontiguousarray(a, dtype=float),
-            np.ascontiguousarray(owner, dtype=np.int64),
-            np.ascontiguousarray(R, dtype=float),
-            np.ascontiguousarray(x, dtype=float),
-            # fresh writable copies: one compiled signature, whatever the caller passed
-            np.array(np.broadcast_to(lo, (B, 3)), dtype=float, order="C"),
-            np.array(np.broadcast_to(hi, (B, 3)), dtype=float, order="C"),
+            _c(a),
+            _c(owner, np.int64),
+            _c(R),
+            _c(x),
+            _c(np.broadcast_to(lo, (B, 3))),
+            _c(np.broadcast_to(hi, (B, 3))),
             bool(bounded),
             int(max_iter),
             *(float(t) for t in tols),
             *out,
         )
     return out
+
+
+def _c(x, dtype=float) -> np.ndarray:
+    """``x`` as a writable C-contiguous array (a copy only when it is not one already): the
+    compiled loop then has one signature, whatever views the caller passed."""
+    return np.require(x, dtype, ("C", "W"))
 
 
 @numba.njit(cache=True)
