@@ -87,6 +87,10 @@ def _variance(c, idx) -> float:
     return float(q.mean() - m.mean() ** 2)
 
 
+def _mean_square(c, idx) -> float:
+    return float(np.mean(np.asarray(c["fresh_meansq"])[idx]))
+
+
 def _choices(cands, draws) -> dict:
     half = draws // 2
     exact, moved = list(range(half)), list(range(half, draws))
@@ -95,6 +99,9 @@ def _choices(cands, draws) -> dict:
         rules[f"fresh_{k}"] = lambda c, k=k: _variance(c, exact[:k] + moved[:k])
     rules[f"exact_{half // 2}"] = lambda c: _variance(c, exact[: half // 2])
     rules["exact"] = lambda c: _variance(c, exact)
+    # the mean square (σ² + mean²) instead of the variance: does weighing the mean help P95?
+    rules[f"rms_{half // 2}"] = lambda c: _mean_square(c, exact[: half // 2] + moved[: half // 2])
+    rules["rms_exact"] = lambda c: _mean_square(c, exact)
     rules["oracle"] = lambda c: c["std"]
     out = {}
     for name, key in rules.items():

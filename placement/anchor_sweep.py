@@ -18,7 +18,7 @@ import numpy as np
 
 from placement.serialization import to_jsonable
 from simulation import checks
-from simulation.room import Room, as_room
+from simulation.room import Room, room_or_default
 
 
 @dataclass(frozen=True)
@@ -117,13 +117,14 @@ def sweep(
     keyword arguments pass through; every M uses the same ``rng``) on one shared range
     table, and recommend the smallest M whose validated P95 (m) ≤ ``target_p95``.
 
+    room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     on_row : an optional callable ``on_row(M, row)`` called after each M (``progress``
         passes through to :func:`placement.seed_then_pso`, as its other keywords).
     """
     from placement.plan import _search_options, seed_then_pso
     from placement.simselect import search_candidates, search_table
 
-    room = as_room(room)
+    room = room_or_default(room)
     counts = _counts(anchors)
     if target_p95 is not None:
         target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")

@@ -46,7 +46,7 @@ from placement.surfaces import random_layout
 from placement.validation import ValidationOptions, validate_layout
 from placement.workers import executor_workers, run_calls
 from simulation import checks
-from simulation.room import Room, as_room
+from simulation.room import Room, room_or_default
 from simulation.statistics import cost_unit
 
 logger = logging.getLogger(__name__)
@@ -525,6 +525,7 @@ def seed_then_pso(
 ) -> PlacementResult:
     """Plan M anchors: range-table search → swarm → finalists → validation (module doc).
 
+    room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     cost : "variance" (the paper's), "mean", "p95" or "rms" of the simulated Euclidean
         error over the scene draws (:class:`placement.costs.DrawsCost`); "peb" (mean PEB
         with constant ``sigma``); or a callable ``f(anchors)`` / ``f(anchors, rng)``.
@@ -557,7 +558,7 @@ def seed_then_pso(
         (:func:`placement.rangetable.range_table` with the search's spacing and draws), to
         share it between runs (e.g. :func:`placement.sweep`).
     """
-    room = as_room(room)
+    room = room_or_default(room)
     run = _prepare(room, locals())
     clock = _Clock()
     seed_layouts, summary = _seeds(room, run, clock)

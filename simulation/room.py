@@ -460,6 +460,12 @@ def as_room(value: Any, name: str = "room") -> Room:
     return value
 
 
+def room_or_default(value: Any, name: str = "room") -> Room:
+    """:func:`as_room`, with None standing for the embedded default room,
+    :meth:`Room.techtile`."""
+    return Room.techtile() if value is None else as_room(value, name)
+
+
 def _toml_value(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"

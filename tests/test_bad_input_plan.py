@@ -122,3 +122,12 @@ def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
     np.testing.assert_array_equal(first.anchors, again.anchors)
     assert [s.name for s in first.seeds] == [s.name for s in again.seeds]
     assert again.settings["seed_search"]["resumed"]
+
+
+def test_room_none_is_the_default_room_and_anything_else_is_refused():
+    # the signature's default: None plans in the embedded room, like an explicit techtile
+    default = seed_then_pso(None, 4, **TINY)
+    explicit = seed_then_pso(Room.techtile(), 4, **TINY)
+    np.testing.assert_array_equal(default.anchors, explicit.anchors)
+    refused("room", lambda: seed_then_pso("techtile", 4, **TINY))
+    refused("room", lambda: placement.sweep(ROOM.to_dict(), anchors=[4], **TINY))
