@@ -46,8 +46,11 @@ def _as_inputs(anchors, positions):
     return a, p
 
 
-def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> np.ndarray:
-    """1/σ² broadcast to (..., P, M); σ must be > 0 (inf allowed: weight 0)."""
+def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> tuple[np.ndarray, float]:
+    """(w, s0): w = (s0/σ)² broadcast to (..., P, M), so 1/σ² = w / s0², with s0 the
+    smallest σ. σ must be > 0 (inf allowed: weight 0). The FIM is linear in 1/σ², and the
+    scaled weights (≤ 1) keep 1/σ² and the determinant from overflowing for σ far below
+    1 m (or underflowing far above)."""
     s = checks.reals("sigma", sigma, allow_inf=True, low=0.0, low_open=True, unit="m")
     try:
         s = np.broadcast_to(s, (*batch, P, M))
@@ -56,7 +59,11 @@ def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> np.ndarr
             f"sigma: shape {s.shape} does not broadcast to (..., P, M) = {(*batch, P, M)}; "
             "use a scalar, (M,), (P, M) or (..., P, M)"
         ) from None
-    return 1.0 / (s * s)
+    s0 = float(np.min(s)) if s.size else 1.0
+    if not np.isfinite(s0):  # every σ infinite: no information at all
+        return np.zeros(s.shape), 1.0
+    r = s0 / s
+    return r * r, s0
 
 
 def _components(a: np.ndarray, p: np.ndarray, w: np.ndarray):
@@ -123,15 +130,23 @@ def _trace_inverse(xx, yy, zz, xy, xz, yz) -> np.ndarray:
     return out
 
 
-def _chunked(a, p, sigma, fn):
-    """Apply ``fn(a, p_chunk, w_chunk)`` over chunks of positions; concatenate on axis -1."""
+def _chunked(a, p, sigma, fn) -> tuple[np.ndarray, float]:
+    """``fn(a, p_chunk, w_chunk)`` over chunks of positions, concatenated on axis -1, on
+    the scaled weights w of :func:`_inverse_variance`; returns it and their scale s0."""
     batch, M, P = a.shape[:-2], a.shape[-2], p.shape[0]
-    w = _inverse_variance(sigma, batch, P, M)
+    w, s0 = _inverse_variance(sigma, batch, P, M)
     step = max(1, _CHUNK_ELEMENTS // max(1, M * int(np.prod(batch, dtype=np.int64))))
     if step >= P:
-        return fn(a, p, w)
+        return fn(a, p, w), s0
     parts = [fn(a, p[i : i + step], w[..., i : i + step, :]) for i in range(0, P, step)]
-    return np.concatenate(parts, axis=len(batch))
+    return np.concatenate(parts, axis=len(batch)), s0
+
+
+def _rescaled(x: np.ndarray, s0: float, power: int) -> np.ndarray:
+    """x · s0^power, where 0 and +inf entries stay as they are (no 0 · inf); beyond the
+    float range the product is +inf or 0."""
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        return np.where((x == 0) | np.isinf(x), x, x * np.float64(s0) ** power)
 
 
 def fim(anchors, positions, sigma=0.04) -> np.ndarray:
@@ -148,7 +163,8 @@ def fim(anchors, positions, sigma=0.04) -> np.ndarray:
             -2,
         )
 
-    return _chunked(a, p, sigma, one)
+    J, s0 = _chunked(a, p, sigma, one)
+    return _rescaled(J, s0, -2)
 
 
 def crlb(anchors, positions, sigma=0.04) -> np.ndarray:
@@ -172,18 +188,26 @@ def crlb(anchors, positions, sigma=0.04) -> np.ndarray:
         out[singular] = np.inf
         return out
 
-    return _chunked(a, p, sigma, one)
+    C, s0 = _chunked(a, p, sigma, one)
+    return _rescaled(C, s0, 2)
 
 
 def crlb_trace(anchors, positions, sigma=0.04) -> np.ndarray:
     """tr J(p)⁻¹, (..., P) in m² — the paper's "PEB" (§IV, eq. 7); +inf where singular."""
+    t, s0 = _scaled_trace(anchors, positions, sigma)
+    return _rescaled(t, s0, 2)
+
+
+def _scaled_trace(anchors, positions, sigma) -> tuple[np.ndarray, float]:
+    """(tr J⁻¹ / s0², s0): the trace on the scaled weights, and their scale."""
     a, p = _as_inputs(anchors, positions)
     return _chunked(a, p, sigma, lambda a, p, w: _trace_inverse(*_components(a, p, w)))
 
 
 def peb(anchors, positions, sigma=0.04) -> np.ndarray:
     """Position error bound √tr J(p)⁻¹, (..., P) in metres; +inf where J is singular."""
-    return np.sqrt(crlb_trace(anchors, positions, sigma))
+    t, s0 = _scaled_trace(anchors, positions, sigma)
+    return np.sqrt(t) * s0  # in range for any σ the float type holds
 
 
 def gdop(anchors, positions) -> np.ndarray:

@@ -21,7 +21,7 @@ from simulation import checks
 from simulation.chirp import Chirp
 from simulation.directivity import aim_vectors, cardioid
 from simulation.noise import check_snr
-from simulation.receiver import Receiver
+from simulation.receiver import Receiver, signal_chain
 from simulation.room import Room, as_room
 
 #: accepted constant range σ (m)
@@ -98,6 +98,9 @@ class PhysicalRangeNoise:
         if not isinstance(self.room, Room):
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
+        chirp, receiver = signal_chain(self.chirp, self.receiver)  # None: the defaults
+        object.__setattr__(self, "chirp", chirp)
+        object.__setattr__(self, "receiver", receiver)
 
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""

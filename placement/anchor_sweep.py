@@ -122,10 +122,13 @@ def sweep(
         passes through to :func:`placement.seed_then_pso`, as its other keywords).
     """
     from placement.plan import _search_options, seed_then_pso
-    from placement.simselect import search_candidates, search_table
+    from placement.simselect import search_table
+    from placement.surfaces import candidate_grid
 
     room = room_or_default(room)
     counts = _counts(anchors)
+    if on_row is not None and not callable(on_row):
+        raise ValueError(f"on_row: must be a callable on_row(M, row) or None, got {on_row!r}")
     if target_p95 is not None:
         target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")
     kw = dict(seed_then_pso_kwargs)
@@ -139,7 +142,7 @@ def sweep(
         kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
         and kw.get("seeds", "auto") == "auto"
     ):
-        n = len(search_candidates(room, search.spacing))
+        n = len(candidate_grid(room, search.spacing))
         if n < max(counts):
             raise ValueError(
                 f"anchors: {max(counts)} anchors exceed the {n} candidate points "
@@ -152,7 +155,7 @@ def sweep(
         t = time.perf_counter()
         res = seed_then_pso(room, M, search=search, rng=entropy, table=table, **kw)
         rows.append(_row(M, res, time.perf_counter() - t))
-        if on_row:
+        if on_row is not None:
             on_row(M, rows[-1])
     recommended = None
     if target_p95 is not None:

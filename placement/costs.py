@@ -17,7 +17,7 @@ import numpy as np
 
 from analysis.fim import peb
 from simulation import checks
-from simulation.room import Room
+from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
 
 #: statistics of the simulated Euclidean errors usable as a cost (+inf when an error is not
@@ -44,11 +44,11 @@ class SimulatedCost:
     precision: str = "float32"
 
     def __post_init__(self) -> None:
-        if self.statistic not in SIMULATED_STATISTICS:
-            raise ValueError(
-                f"statistic: unknown {self.statistic!r}; allowed: {list(SIMULATED_STATISTICS)}"
-            )
+        checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
         checks.count("realizations", self.realizations, low=1, high=100_000)
+        room = as_room(self.room)
+        if self.nodes is not None:
+            checks.inside("nodes", checks.points("nodes", self.nodes), room.size)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator) -> float:
         from simulation.evaluation import evaluate_layout
@@ -87,13 +87,14 @@ class DrawsCost:
     precision: str = "float32"
 
     def __post_init__(self) -> None:
-        if self.statistic not in SIMULATED_STATISTICS:
-            raise ValueError(
-                f"statistic: unknown {self.statistic!r}; allowed: {list(SIMULATED_STATISTICS)}"
-            )
-        nodes = np.asarray(self.nodes, dtype=float)
-        if nodes.ndim != 3 or nodes.shape[-1] != 3:
-            raise ValueError(f"nodes: expected shape (D, P, 3), got {nodes.shape}")
+        checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
+        room = as_room(self.room)
+        nodes = checks.reals("nodes", self.nodes, shape=(None, None, 3))
+        if nodes.shape[0] < 1 or nodes.shape[1] < 1:
+            raise ValueError(f"nodes: expected (D >= 1, P >= 1, 3), got {nodes.shape}")
+        checks.inside("nodes", nodes, room.size)
+        checks.count("exact_draws", self.exact_draws, low=0, high=nodes.shape[0])
+        checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
 
     @property
     def draws(self) -> int:
@@ -137,6 +138,9 @@ class PEBCost:
 
     def __post_init__(self) -> None:
         checks.real("sigma", self.sigma, low=0.0, high=10.0, low_open=True, unit="m")
+        room = as_room(self.room)
+        if self.nodes is not None:
+            checks.inside("nodes", checks.points("nodes", self.nodes), room.size)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
         nodes = self.room.grid() if self.nodes is None else self.nodes

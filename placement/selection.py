@@ -100,6 +100,7 @@ def design_inputs(
                 f"(first: index {off[0]}, {cand[off[0]].tolist()}); "
                 "use placement.project or placement.candidate_grid"
             )
+        checks.distinct("candidates", cand)  # a repeated point would give coincident anchors
     N = cand.shape[0]
     if isinstance(M, bool) or not isinstance(M, int | np.integer) or not 4 <= M <= N:
         raise ValueError(

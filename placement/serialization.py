@@ -34,11 +34,13 @@ def fingerprint(parts: dict) -> str:
 
 
 def write_json_atomic(path: str | os.PathLike, obj, strict: bool = True) -> None:
-    """Write ``obj`` as JSON to ``path`` atomically (a temporary file, flushed to disk,
-    then renamed over ``path``), so a crash never leaves a half-written file. ``strict``:
-    non-finite numbers become null (:func:`to_jsonable`); otherwise they are written as
-    Python's ``Infinity``/``NaN`` and read back unchanged (checkpoints)."""
+    """Write ``obj`` as JSON to ``path`` atomically (missing parent folders created; a
+    temporary file, flushed to disk, then renamed over ``path``), so a crash never leaves
+    a half-written file. ``strict``: non-finite numbers become null (:func:`to_jsonable`);
+    otherwise they are written as Python's ``Infinity``/``NaN`` and read back unchanged
+    (checkpoints)."""
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)  # as checks.output_path allowed
     tmp = path.with_name(path.name + ".tmp")
     with open(tmp, "w") as fh:
         json.dump(to_jsonable(obj) if strict else obj, fh)

@@ -354,19 +354,13 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     return found
 
 
-def search_candidates(room: Room, spacing: float) -> np.ndarray:
-    """(N, 3) the distinct points of ``candidate_grid(room, spacing)`` (the grids of two
-    surfaces meet at their shared edge)."""
-    return new_points(np.empty((0, 3)), candidate_grid(room, spacing))
-
-
 def search_table(
     room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None
 ) -> RangeTable:
-    """The range table of a search: every distinct point of
+    """The range table of a search: every point of
     ``candidate_grid(room, options.spacing)`` on ``options.draws`` scene draws of ``nodes``
     (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
-    cand = search_candidates(room, options.spacing)
+    cand = candidate_grid(room, options.spacing)
     return range_table(
         room,
         cand,

@@ -205,11 +205,27 @@ def to_uv(room: Room, points, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray
     return idx, np.take_along_axis(p, uv_axes, axis=-1)
 
 
-def from_uv(room: Room, index, uv) -> np.ndarray:
-    """(..., 3) points from surface indices (...,) and in-plane coordinates (..., 2)."""
+def from_uv(room: Room, index, uv, tol: float = 1e-6) -> np.ndarray:
+    """(..., 3) points from surface indices (...,) and in-plane coordinates uv (..., 2) in
+    metres; ValueError for an index that names no surface or a uv off its rectangle (by
+    more than ``tol`` m)."""
     surfs = mounting_surfaces(room)
-    index = np.asarray(index, dtype=int)
-    uv = np.asarray(uv, dtype=float)
+    last = len(surfs) - 1
+    index = checks.reals("index", index, low=0, high=last)
+    if np.any(index != np.round(index)):
+        raise ValueError(f"index: every entry must be a surface index, an integer in [0, {last}]")
+    index = index.astype(int)
+    uv = checks.reals("uv", uv, shape=(*index.shape, 2))
+    lo = np.array([s.lower for s in surfs])[index]
+    hi = np.array([s.upper for s in surfs])[index]
+    off = (uv < lo - tol) | (uv > hi + tol)
+    if np.any(off):
+        k = np.argwhere(off.any(axis=-1))[0]
+        raise ValueError(
+            f"uv: {uv[tuple(k)].tolist()} at index {k.tolist()} lies off surface "
+            f"{surfs[index[tuple(k)]].name!r} (u in [{lo[tuple(k)][0]:g}, {hi[tuple(k)][0]:g}], "
+            f"v in [{lo[tuple(k)][1]:g}, {hi[tuple(k)][1]:g}] m)"
+        )
     out = np.empty((*index.shape, 3))
     for i, s in enumerate(surfs):
         m = index == i
@@ -222,7 +238,8 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
     """(N, 3) candidate mounting points: a grid of about ``spacing`` m on every surface.
 
     Each rectangle side gets ⌈length/spacing⌉ + 1 evenly spaced points including both
-    edges. Shared edges between surfaces are not duplicated (they are 3 cm apart).
+    edges. Two surfaces that meet (a wall and the ceiling, two walls) share the points
+    of their common edge: each is kept once, where its first surface lists it.
     Points in a keep-out box are dropped, and every allowed rectangle
     (:func:`allowed_rectangles`) left without a point gets its centre, so that each part
     of the allowed region keeps a candidate.
@@ -253,7 +270,14 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
             empty = ~inside.any(axis=0)
             p = np.concatenate([p, (lo[empty] + hi[empty]) / 2])
         pts.append(p)
-    return np.concatenate(pts, axis=0)
+    return _distinct(np.concatenate(pts, axis=0))
+
+
+def _distinct(points: np.ndarray, resolution: float = 1e-6) -> np.ndarray:
+    """The points (N, 3) without repeats (equal to ``resolution`` m), in their order."""
+    key = np.round(points / resolution).astype(np.int64)
+    _, first = np.unique(key, axis=0, return_index=True)
+    return points[np.sort(first)]
 
 
 def area_counts(room: Room, M: int) -> np.ndarray:

@@ -28,7 +28,7 @@ from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
-from simulation.receiver import DEFAULT_PRECISION, Receiver, dsp_for
+from simulation.receiver import DEFAULT_PRECISION, Receiver, dsp_for, signal_chain
 from simulation.room import Room, as_room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
@@ -60,14 +60,7 @@ class RangingScene:
         self.room = room = as_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
         self.nodes = room.grid() if nodes is None else _check_nodes(nodes, room)
-        self.chirp = Chirp() if chirp is None else chirp
-        self.receiver = Receiver() if receiver is None else receiver
-        if not isinstance(self.chirp, Chirp):
-            raise ValueError(f"chirp: must be a simulation.Chirp, got {checks.describe(chirp)}")
-        if not isinstance(self.receiver, Receiver):
-            raise ValueError(
-                f"receiver: must be a simulation.Receiver, got {checks.describe(receiver)}"
-            )
+        self.chirp, self.receiver = signal_chain(chirp, receiver)
         self.snr_db = check_snr("snr_db", snr_db)
         checks.choice("precision", precision, PRECISIONS)
         n = len(self.nodes) * len(self.anchors) * self.receiver.window

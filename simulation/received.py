@@ -18,7 +18,7 @@ import numpy as np
 
 from simulation.chirp import Chirp
 from simulation.multipath import Paths
-from simulation.receiver import Receiver
+from simulation.receiver import Receiver, signal_chain
 
 
 def active_paths(delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiver: Receiver):
@@ -122,6 +122,5 @@ def received_windows(
     receiver: Receiver | None = None,
 ) -> np.ndarray:
     """(P, M, N) noise-free received windows of :class:`~simulation.multipath.Paths`."""
-    chirp = Chirp() if chirp is None else chirp
-    receiver = Receiver() if receiver is None else receiver
+    chirp, receiver = signal_chain(chirp, receiver)
     return synthesize(paths.delays(speed_of_sound), paths.amplitude, chirp, receiver)

@@ -61,8 +61,15 @@ class Receiver:
                 raise ValueError(
                     f"{name}: must be in (0, fs/2) = (0, {self.fs / 2:g}) Hz, got {v:g}"
                 )
-        checks.count("highpass_order", self.highpass_order, low=1, high=40)
+        order = checks.count("highpass_order", self.highpass_order, low=1, high=40)
         checks.count("lowpass_taps", self.lowpass_taps, low=1, high=100_000)
+        # sosfiltfilt pads the window by 3 (2S + 1 − odd) samples, S = ⌈order/2⌉ sections
+        pad = 3 * (2 * math.ceil(order / 2) + 1 - order % 2)
+        if self.window <= pad:
+            raise ValueError(
+                f"window: must be more than {pad} samples (the zero-phase high-pass of order "
+                f"{order} pads by that much), got {self.window}"
+            )
 
     @property
     def window_times(self) -> np.ndarray:
@@ -139,8 +146,7 @@ def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | Non
     """
     import scipy.signal
 
-    chirp = Chirp() if chirp is None else chirp
-    rx = Receiver() if receiver is None else receiver
+    chirp, rx = signal_chain(chirp, receiver)
     x = np.asarray(window, dtype=float)
     if x.shape != (rx.window,):
         raise ValueError(f"window: expected shape ({rx.window},), got {x.shape}")
@@ -209,7 +215,13 @@ class Dsp:
         # Steps 1-2 as one matrix: c = T · reverse(H · x) = (T · H[::-1]) x, with H the
         # sosfiltfilt map (applied to the identity) and T the (Nc, N) convolution matrix
         # of ref, T[k, m] = ref[k − m].
-        H = scipy.signal.sosfiltfilt(receiver.highpass_sos(), np.eye(N), axis=0)
+        try:
+            H = scipy.signal.sosfiltfilt(receiver.highpass_sos(), np.eye(N), axis=0)
+        except np.linalg.LinAlgError:  # poles at z = 1 to rounding: no initial conditions
+            raise ValueError(
+                f"highpass_cutoff: {receiver.highpass_cutoff:g} Hz is too close to 0 for a "
+                f"high-pass of order {receiver.highpass_order} at fs = {receiver.fs:g} Hz"
+            ) from None
         kk = np.arange(self.n_corr)[:, None] - np.arange(N)[None, :]
         T = np.where((kk >= 0) & (kk < len(ref)), ref[np.clip(kk, 0, len(ref) - 1)], 0.0)
         self.G_T = np.ascontiguousarray((T @ H[::-1]).T)  # (N, Nc): windows @ G_T
@@ -298,15 +310,32 @@ class Dsp:
         return self.receiver.range_from_index(self.indices(windows), speed_of_sound)
 
 
+def signal_chain(chirp: Chirp | None, receiver: Receiver | None) -> tuple[Chirp, Receiver]:
+    """The chirp and receiver (the defaults when None), checked to work together: the
+    chirp's band below the receiver's Nyquist frequency fs/2."""
+    chirp = Chirp() if chirp is None else chirp
+    receiver = Receiver() if receiver is None else receiver
+    if not isinstance(chirp, Chirp):
+        raise ValueError(f"chirp: must be a simulation.Chirp or None, got {checks.describe(chirp)}")
+    if not isinstance(receiver, Receiver):
+        raise ValueError(
+            f"receiver: must be a simulation.Receiver or None, got {checks.describe(receiver)}"
+        )
+    top = max(chirp.f0, chirp.f1)
+    if not top < receiver.fs / 2:
+        raise ValueError(
+            f"chirp: its band reaches {top:g} Hz, at or above the receiver's Nyquist frequency "
+            f"fs/2 = {receiver.fs / 2:g} Hz (it would alias)"
+        )
+    return chirp, receiver
+
+
 def dsp_for(
     chirp: Chirp | None = None, receiver: Receiver | None = None, precision: str = "float64"
 ) -> Dsp:
     """The (cached) :class:`Dsp` of a chirp and receiver (the defaults when None)."""
-    return _dsp_cached(
-        Chirp() if chirp is None else chirp,
-        Receiver() if receiver is None else receiver,
-        precision,
-    )
+    chirp, receiver = signal_chain(chirp, receiver)
+    return _dsp_cached(chirp, receiver, precision)
 
 
 @functools.lru_cache(maxsize=8)

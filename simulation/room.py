@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -494,7 +494,7 @@ def _boxes(items, what: str, size) -> tuple[tuple, tuple[str, ...]]:
     """Normalize keep-out or zone boxes to ((min, max), ...) and their names; check them."""
     if items is None:
         items = ()
-    if isinstance(items, Mapping) or isinstance(items, str):
+    if isinstance(items, Mapping | str | bytes) or not isinstance(items, Iterable):
         raise ValueError(f"{what}: expected a list of boxes (min_xyz, max_xyz), got {items!r}")
     boxes, names = [], []
     for k, item in enumerate(items):

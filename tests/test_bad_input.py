@@ -170,6 +170,10 @@ OUTSIDE = [[[9.0, 1.0, 1.0]], [[-0.5, 1.0, 1.0]], [[1.0, 1.0, 3.0]]]
         lambda p: placement.relax_select(ROOM, 4, spacing=1.6, nodes=p),
         lambda p: placement.exhaustive_search(ROOM, 4, spacing=3.0, nodes=p),
         lambda p: placement.refine_peb(ROOM, A, nodes=p),
+        lambda p: placement.seed_then_pso(ROOM, 4, nodes=p, cost="peb", seeds=None, rng=0),
+        lambda p: placement.PEBCost(ROOM, nodes=p),
+        lambda p: placement.SimulatedCost(ROOM, nodes=p),
+        lambda p: placement.DrawsCost(ROOM, np.asarray(p)[None]),
     ],
 )
 def test_nodes_outside_the_room_are_refused(call, nodes):
@@ -473,3 +477,93 @@ def test_room_must_be_a_room(call, room):
 )
 def test_neighbours_of_the_issue_examples(call, name):
     refused(name, call)
+
+
+@pytest.mark.parametrize(
+    ("kw", "name"),
+    [
+        ({"exact_draws": 2.5}, "exact_draws"),
+        ({"exact_draws": -1}, "exact_draws"),
+        ({"exact_draws": 2}, "exact_draws"),  # more than the one draw
+        ({"mount_tolerance": math.nan}, "mount_tolerance"),
+        ({"mount_tolerance": None}, "mount_tolerance"),
+        ({"statistic": ["variance"]}, "statistic"),
+        ({"room": None}, "room"),
+        ({"nodes": np.zeros((0, 3, 3))}, "nodes"),
+    ],
+)
+def test_draws_cost_settings_are_checked(kw, name):
+    refused(name, lambda: placement.DrawsCost(**{"room": ROOM, "nodes": NODES[None], **kw}))
+
+
+def test_costs_refuse_a_room_that_is_not_a_room():
+    refused("room", lambda: placement.PEBCost("techtile"))
+    refused("room", lambda: placement.SimulatedCost(room={"size": (8, 4, 2.4)}))
+
+
+@pytest.mark.parametrize(
+    ("index", "uv", "name"),
+    [
+        ([7, 0], [[0.5, 0.5], [0.5, 0.5]], "index"),  # no surface 7
+        ([0.5], [[0.5, 0.5]], "index"),
+        (None, [[0.5, 0.5]], "index"),
+        ([0], None, "uv"),
+        ([0], 5.0, "uv"),
+        ([0, 1], [[0.5, 0.5]], "uv"),
+        ([0], [[1e6, 0.5]], "uv"),  # far off the south wall
+        ([0], [[0.5, math.nan]], "uv"),
+    ],
+)
+def test_from_uv_refuses_what_names_no_point_on_a_surface(index, uv, name):
+    refused(name, lambda: placement.from_uv(ROOM, index, uv))
+
+
+def test_repeated_candidates_are_refused_not_returned_as_coincident_anchors():
+    cand = placement.candidate_grid(ROOM, 0.5)
+    twice = np.vstack([cand[[0, 5, 10, 15, 20]], cand[:1]])
+    refused("candidates", lambda: placement.exhaustive_search(ROOM, 6, candidates=twice))
+    refused("candidates", lambda: placement.relax_select(ROOM, 6, candidates=twice))
+
+
+def test_a_checkpoint_in_a_new_folder_is_written(tmp_path):
+    path = tmp_path / "new" / "sub" / "state.json"
+    placement.seed_then_pso(
+        ROOM, 4, cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0,
+        progress=False, rng=0, checkpoint=path, nodes=NODES,
+    )  # fmt: skip
+    state = json.loads(path.read_text())  # the swarm after its one iteration
+    assert state["nfev"] == 3 and len(state["x"]) == 3
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: Receiver(window=33), "window"),  # the default high-pass pads by 33
+        (lambda: Receiver(window=120, highpass_order=40), "window"),
+        (lambda: evaluate_layout(ROOM, A, nodes=NODES, receiver="r"), "receiver"),
+        (lambda: evaluate_layout(ROOM, A, nodes=NODES, chirp=Chirp(f0=1e6, f1=9e5)), "chirp"),
+        (
+            lambda: simulate_ranges(ROOM, A, NODES, receiver=Receiver(highpass_cutoff=1e-9)),
+            "highpass_cutoff",
+        ),
+        (lambda: analysis.PhysicalRangeNoise(ROOM, chirp="x"), "chirp"),
+    ],  # fmt: skip
+)
+def test_chirp_and_receiver_must_work_together(call, name):
+    refused(name, call)
+
+
+def test_physical_noise_takes_none_for_the_default_chirp_and_receiver():
+    noise = analysis.PhysicalRangeNoise(ROOM, chirp=None, receiver=None)
+    assert noise.chirp == Chirp() and noise.receiver == Receiver()
+
+
+@pytest.mark.parametrize("items", [5, True, 2.5])
+def test_keepouts_and_zones_must_be_lists_of_boxes(items):
+    refused("keepouts", lambda: Room(keepouts=items))
+    refused("zones", lambda: Room(zones=items))
+
+
+def test_sweep_checks_on_row_before_planning():
+    kw = dict(cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0)
+    refused("on_row", lambda: placement.sweep(ROOM, anchors=[4], on_row="x", **kw), within=2)

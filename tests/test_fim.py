@@ -136,3 +136,21 @@ def test_bad_shapes_rejected():
         analysis.peb(np.ones((4, 3)), np.zeros((2, 3)), sigma=np.ones(3))
     with pytest.raises(ValueError, match="finite"):
         analysis.peb(np.full((4, 3), np.nan), np.zeros((2, 3)))
+
+
+@pytest.mark.parametrize("sigma", [1e-300, 1e-60, 1e-3, 1e3, 1e60, 1e300])
+def test_peb_is_linear_in_sigma_over_the_whole_float_range(sigma):
+    # PEB = σ · GDOP for a constant σ (eq. 6-7): no overflow of 1/σ² into a false "singular"
+    room = Room.techtile()
+    a, nodes = room.corners_layout(), room.grid()[::9]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = analysis.peb(a, nodes, sigma)
+    np.testing.assert_allclose(got, sigma * analysis.gdop(a, nodes), rtol=1e-12)
+
+
+def test_a_noise_free_calibrated_sigma_gives_a_tiny_bound_not_inf():
+    sigma = analysis.calibrated_sigma(np.zeros((3, 10, 4)))  # the smallest positive float
+    room = Room.techtile()
+    got = analysis.peb(room.corners_layout(), room.grid()[::27], sigma)
+    assert np.all(np.isfinite(got)) and np.all(got < 1e-300)

@@ -55,7 +55,9 @@ def test_default_returns_anchors_array():
 
 def _mean_peb_in_uv(room, a0, x):
     idx, _ = placement.to_uv(room, a0)
-    return analysis.peb(placement.from_uv(room, idx, x.reshape(-1, 2)), room.grid(), 0.04).mean()
+    # central differences at an edge step 10 µm past it: allow that much
+    a = placement.from_uv(room, idx, x.reshape(-1, 2), tol=1e-4)
+    return analysis.peb(a, room.grid(), 0.04).mean()
 
 
 @pytest.mark.parametrize("hessian", ["limited-memory", "exact"])

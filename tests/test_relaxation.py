@@ -15,8 +15,8 @@ from simulation import Room
 SHOEBOX = Room(
     size=(6.0, 5.0, 3.0), mounting=("west", "east", "south", "north", "ceiling"), name="shoebox"
 )
-#: (room, candidate spacing) giving about 60 candidates: 60 in techtile, 64 in the shoebox
-SETS = {"techtile": (Room.techtile(), 1.6), "shoebox": (SHOEBOX, 2.0)}
+#: (room, candidate spacing) giving about 60 candidates: 56 in techtile, 57 in the shoebox
+SETS = {"techtile": (Room.techtile(), 1.4), "shoebox": (SHOEBOX, 1.5)}
 
 
 @pytest.fixture(scope="module", params=sorted(SETS))

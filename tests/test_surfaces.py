@@ -96,3 +96,20 @@ def test_naive_layout_spreads_anchors_along_the_top_of_the_mounting_walls():
     assert moved[0] == pytest.approx(0.07, abs=1e-5) and np.all(moved[1:] == 0)  # to the ceiling
     with pytest.raises(ValueError, match="M"):
         placement.naive_layout(room, 0)
+
+
+@pytest.mark.parametrize(
+    "mounting", [("south", "north", "ceiling"), ("west", "east", "south", "north", "ceiling")]
+)
+def test_candidate_grid_lists_each_shared_edge_point_once(mounting):
+    # a wall and the ceiling (or two walls) meet along a line that both grids contain
+    room = Room(size=(6.0, 5.0, 3.0), mounting=mounting)
+    cand = placement.candidate_grid(room, 0.5)
+    d = np.linalg.norm(cand[:, None] - cand[None], axis=-1)
+    d[np.diag_indices(len(cand))] = np.inf
+    assert d.min() > 1e-3
+    # and nothing is lost: every surface's own grid is in the union
+    for name in mounting:
+        own = placement.candidate_grid(Room(size=room.size, mounting=(name,)), 0.5)
+        gap = np.linalg.norm(own[:, None] - cand[None], axis=-1).min(axis=1)
+        assert gap.max() < 1e-9
