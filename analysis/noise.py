@@ -186,6 +186,8 @@ def calibrated_sigma(
         x = e.reshape(-1, e.shape[-1])
     if not np.all(np.isfinite(x)):
         raise ValueError("range_errors: must be finite")
+    if x.size == 0:
+        raise ValueError(f"range_errors: no errors to calibrate from (shape {e.shape})")
     med = np.median(x, axis=0)
     sigma = MAD_TO_SIGMA * np.median(np.abs(x - med), axis=0)
     if method == "inlier":

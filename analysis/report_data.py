@@ -280,6 +280,14 @@ def _comparison(name: str, value) -> LayoutEntry:
     return LayoutEntry(str(name), anchors, "comparison")
 
 
+def _check_layout(room: Room, entry: LayoutEntry) -> None:
+    """A layout the report is about: ≥ 4 distinct anchors inside the room."""
+    try:
+        checks.distinct("anchors", room.check_anchors(entry.anchors))
+    except ValueError as exc:
+        raise ValueError(f"{entry.name} layout: {exc}") from None
+
+
 def collect_layouts(
     data: dict[str, dict | None],
     room: Room,
@@ -301,6 +309,8 @@ def collect_layouts(
         entry = _comparison(name, value)
         if not any(_same(e.anchors, entry.anchors) for e in out):
             out.append(entry)
+    for e in out:
+        _check_layout(room, e)
     corners = room.corners_layout()
     if not any(_same(e.anchors, corners) for e in out):
         out.append(LayoutEntry("corners", corners, "reference"))

@@ -224,7 +224,7 @@ def _layout_section(ctx: Context) -> list[str]:
         "<h2>Layout</h2>",
         f"<h3>{_head_of(ctx, best)}</h3>",
         '<p class="sub">Anchor coordinates in room coordinates; surface: the nearest room '
-        "plane (anchors sit on the allowed mounting surfaces, 3 cm off the plane).</p>",
+        "plane.</p>",
         _coordinates(ctx, best),
         *_figures_html(ctx, "layout"),
     ]

@@ -231,6 +231,14 @@ def _build(G: np.ndarray, M: int, criterion: str):
     return cp.Problem(obj, cons), w, dual
 
 
+def _solver_keys() -> list[str]:
+    """The keywords ``solver_opts`` may hold: Clarabel's settings and cvxpy's verbose."""
+    import clarabel
+
+    settings = [k for k in dir(clarabel.DefaultSettings()) if not k.startswith("_")]
+    return [k for k in settings if k != "default"] + ["verbose"]
+
+
 def _solve(G: np.ndarray, M: int, criterion: str, solver_opts: dict | None):
     """Build and solve; returns (w or None, λ or None, cvxpy status, solver value, times, info)."""
     import cvxpy as cp
@@ -243,7 +251,10 @@ def _solve(G: np.ndarray, M: int, criterion: str, solver_opts: dict | None):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "solution may be inaccurate": we report status
             opts = {**_CLARABEL_DEFAULTS, **(solver_opts or {})}
-            prob.solve(solver=cp.CLARABEL, **opts)
+            try:
+                prob.solve(solver=cp.CLARABEL, **opts)
+            except TypeError as exc:  # a setting of the wrong type: the caller's input
+                raise ValueError(f"solver_opts: Clarabel refused {solver_opts}: {exc}") from None
         status = str(prob.status)
     except (cp.error.SolverError, ArithmeticError, np.linalg.LinAlgError) as exc:
         log.warning("relax_select: Clarabel failed: %s", exc)
@@ -450,6 +461,7 @@ def relax_select(
     starts = checks.count("starts", starts, low=1, high=10_000)
     if solver_opts is not None:
         checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
+        checks.known_keys("solver_opts", solver_opts, _solver_keys())
     name = "rng" if seed is checks.UNSET else "seed"
     rng = checks.rng(name, checks.rng_or_seed(rng, seed, owner="relax_select"))
     G = inp.table()

@@ -123,6 +123,7 @@ def _compute_regions(room: Room):
 
 
 def _room_regions(room: Room):
+    room = as_room(room)
     key = (room.size, room.mounting, room.anchor_offset, room.keepouts)
     regions = _REGIONS.get(key)
     if regions is None:
@@ -184,6 +185,7 @@ def surface_index(room: Room, points, tol: float = 1e-9) -> np.ndarray:
     p = checks.reals("points", points)
     if p.ndim < 1 or p.shape[-1] != 3:
         raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
+    tol = checks.real("tol", tol, low=0.0, high=1.0, unit="m")
     lo, hi = _bounds(room)
     on = np.all((p[..., None, :] >= lo - tol) & (p[..., None, :] <= hi + tol), axis=-1)
     return np.where(on.any(axis=-1), np.argmax(on, axis=-1), -1)

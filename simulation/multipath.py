@@ -129,6 +129,8 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"nodes: expected shape (P, 3), got {p.shape}")
     images = ImageSet.for_room(room) if images is None else images
+    if not isinstance(images, ImageSet):
+        raise ValueError(f"images: must be an ImageSet or None, got {checks.describe(images)}")
     n = p.shape[0] * a.shape[0] * len(images)
     checks.check_size(
         "nodes x anchors x image sources",

@@ -83,7 +83,10 @@ def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
             f"region: expected (lo (3,), hi (3,)) in metres, got {checks.describe(region)}"
         ) from None
     if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(hi >= lo)):
-        raise ValueError(f"region: expected finite (lo (3,), hi (3,)) with hi >= lo, got {region}")
+        raise ValueError(
+            f"region: expected finite (lo (3,), hi (3,)) with hi >= lo, "
+            f"got lo {lo.tolist()}, hi {hi.tolist()}"
+        )
     return lo, hi
 
 

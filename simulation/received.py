@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from simulation import checks
 from simulation.chirp import Chirp
 from simulation.multipath import Paths
 from simulation.receiver import Receiver, signal_chain
@@ -121,6 +122,12 @@ def received_windows(
     chirp: Chirp | None = None,
     receiver: Receiver | None = None,
 ) -> np.ndarray:
-    """(P, M, N) noise-free received windows of :class:`~simulation.multipath.Paths`."""
+    """(P, M, N) noise-free received windows of :class:`~simulation.multipath.Paths`;
+    ``speed_of_sound`` in m/s."""
+    if not isinstance(paths, Paths):
+        raise ValueError(f"paths: must be simulation.multipath.Paths, got {checks.describe(paths)}")
+    speed_of_sound = checks.real(
+        "speed_of_sound", speed_of_sound, low=0.0, low_open=True, unit="m/s"
+    )
     chirp, receiver = signal_chain(chirp, receiver)
     return synthesize(paths.delays(speed_of_sound), paths.amplitude, chirp, receiver)

@@ -170,8 +170,8 @@ def range_std(range_errors) -> np.ndarray:
     """(P,) σ_r^p: mean over the anchors of the standard deviation over the realizations
     of the range error, range_errors (R, P, M) in metres (paper §V-A)."""
     r = checks.reals("range_errors", range_errors)
-    if r.ndim != 3:
-        raise ValueError(f"range_errors: expected shape (R, P, M), got {r.shape}")
+    if r.ndim != 3 or 0 in r.shape:
+        raise ValueError(f"range_errors: expected shape (R, P, M), none of them 0, got {r.shape}")
     return np.mean(np.std(r, axis=0), axis=-1)
 
 

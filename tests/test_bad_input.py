@@ -567,3 +567,37 @@ def test_keepouts_and_zones_must_be_lists_of_boxes(items):
 def test_sweep_checks_on_row_before_planning():
     kw = dict(cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0)
     refused("on_row", lambda: placement.sweep(ROOM, anchors=[4], on_row="x", **kw), within=2)
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (
+            lambda: placement.relax_select(ROOM, 4, spacing=1.6, solver_opts={"bogus": 1}),
+            "solver_opts",
+        ),
+        (
+            lambda: placement.relax_select(ROOM, 4, spacing=1.6, solver_opts={"max_iter": "x"}),
+            "solver_opts",
+        ),
+        (lambda: placement.on_surfaces(ROOM, A, tol=math.nan), "tol"),
+        (lambda: placement.to_uv(ROOM, A, tol=-1), "tol"),
+        (lambda: placement.allowed_area(None), "room"),
+        (lambda: analysis.calibrated_sigma(np.zeros((0, 5, 4)), method="mad"), "range_errors"),
+        (lambda: analysis.range_std(np.zeros((0, 5, 4))), "range_errors"),
+        (lambda: locate(A, np.ones((2, 4)), region=([1, 1, 1], [0, 0, 0])), "region"),
+    ],  # fmt: skip
+)
+def test_solver_settings_tolerances_and_empty_samples(call, name):
+    refused(name, call)
+
+
+def test_received_windows_checks_the_speed_of_sound_and_the_images():
+    from simulation.multipath import compute_paths
+    from simulation.received import received_windows
+
+    paths = compute_paths(ROOM, A, NODES[:2])
+    for c in (0.0, -343.0, math.nan):
+        refused("speed_of_sound", lambda c=c: received_windows(paths, c))
+    refused("paths", lambda: received_windows(None, 343.0))
+    refused("images", lambda: compute_paths(ROOM, A, NODES[:2], images=5))

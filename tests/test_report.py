@@ -300,3 +300,18 @@ def test_report_with_one_realization_skips_the_dop_map(tmp_path, monkeypatch):
     assert not any("DOP" in t for t in rep.figures)
     assert any("DOP difference map skipped" in n for n in rep.notes)
     assert any("RMSE" in t for t in rep.figures)
+
+
+@pytest.mark.parametrize(
+    "anchors",
+    [
+        [[1, 1, 1], [1, 1, 1], [2, 2, 2], [3, 1, 1]],  # two coincident anchors
+        [[1, 1, 1], [2, 2, 2], [3, 1, 1]],  # too few for 3D positioning
+        [[1, 1, 1], [2, 2, 2], [3, 1, 1], [9, 1, 1]],  # one outside the room
+    ],
+)
+def test_report_refuses_a_layout_that_no_plan_could_return(tmp_path, anchors):
+    result, _ = write_result(tmp_path)
+    (tmp_path / "result.json").write_text(json.dumps({**result, "anchors": anchors}))
+    with pytest.raises(ValueError, match="optimized layout: anchors"):
+        rp.write_report(tmp_path, realizations=0, dpi=40)

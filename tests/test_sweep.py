@@ -51,7 +51,7 @@ def test_sweep_rejects_bad_input():
     with pytest.raises(ValueError, match="target_p95"):
         sweep(ROOM, [4], target_p95=-1)
     assert parse_counts("4-6") == [4, 5, 6] and parse_counts("4, 8") == [4, 8]
-    for bad in ("6-4", "four", "4-"):
+    for bad in ("6-4", "four", "4-", "4,4", "\u0661\u0662"):  # a repeat; Arabic-Indic 12
         with pytest.raises(ValueError, match="--anchors"):
             parse_counts(bad)
 

@@ -38,10 +38,13 @@ def run(args) -> int:
     if geometry != "3d":
         print(f"note: the anchors are {geometry}")
     print("PEB = sqrt(tr J^-1) in metres over the grid:")
-    print(
-        f"  mean {stats['mean']:.4f}  median {stats['median']:.4f}  P95 {stats['p95']:.4f}  "
-        f"max {stats['max']:.4f}  singular nodes {stats['n_invalid']}"
-    )
+    if stats["n"] == 0:  # no statistic of an empty set: say what the bound is
+        print(f"  infinite at all {len(nodes)} nodes (singular nodes {stats['n_invalid']})")
+    else:
+        print(
+            f"  mean {stats['mean']:.4f}  median {stats['median']:.4f}  "
+            f"P95 {stats['p95']:.4f}  max {stats['max']:.4f}  singular nodes {stats['n_invalid']}"
+        )
     if args.out:
         write_json(
             args.out,

@@ -36,14 +36,17 @@ def register(sub) -> None:
 def parse_counts(text: str) -> list[int]:
     """Anchor counts from "4-10", "4,6,8" or "8"."""
     spec = str(text).strip()
-    m = re.fullmatch(r"(\d+)\s*-\s*(\d+)", spec)
+    m = re.fullmatch(r"([0-9]+)\s*-\s*([0-9]+)", spec)
     if m:
         lo, hi = int(m.group(1)), int(m.group(2))
         if lo > hi:
             raise ValueError(f"--anchors: expected LOW-HIGH with LOW <= HIGH, got {text!r}")
         return list(range(lo, hi + 1))
-    if re.fullmatch(r"\d+(\s*,\s*\d+)*", spec):
-        return [int(v) for v in spec.split(",")]
+    if re.fullmatch(r"[0-9]+(\s*,\s*[0-9]+)*", spec):
+        counts = [int(v) for v in spec.split(",")]
+        if len(set(counts)) < len(counts):
+            raise ValueError(f"--anchors: each anchor count once, got {text!r}")
+        return counts
     raise ValueError(f"--anchors: expected a range like 4-10 or a list like 4,6,8, got {text!r}")
 
 
