@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Iterable
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -250,7 +251,12 @@ class SearchOptions:
         checks.count("patience", self.patience, low=1, high=100_000)
         checks.count("evaluations", self.evaluations, low=1, high=10**7)
         checks.count("finish_neighbours", self.finish_neighbours, low=1, high=10_000)
-        object.__setattr__(self, "fine_spacings", tuple(self.fine_spacings))
+        fine = self.fine_spacings
+        if isinstance(fine, str | bytes) or not isinstance(fine, Iterable):
+            raise ValueError(
+                f"fine_spacings: expected spacings in m, e.g. (0.2, 0.1), got {fine!r}"
+            )
+        object.__setattr__(self, "fine_spacings", tuple(fine))
         for s in self.fine_spacings:
             checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
         checks.count("fine_steps", self.fine_steps, low=1, high=10)

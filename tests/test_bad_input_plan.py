@@ -64,6 +64,7 @@ def test_options_must_be_pso_options():
         ({"chains": -1}, "chains"),
         ({"spacing": 0}, "spacing"),
         ({"chains": 0}, "chains"),
+        ({"fine_spacings": 0.2}, "fine_spacings"),
         ("starts", "search"),
     ],  # fmt: skip
 )
