@@ -1,0 +1,93 @@
+"""How far does a layout's validated σ move with the validation's own noise?
+
+The spread target compares the σ of five runs, each validated on its own noise draws. This
+benchmark separates the two parts of that spread: it validates the layout of every saved
+plan (``docs/benchmarks/plan/M{M}_s{seed}.json``, the 20-run benchmark) again under
+``--validations`` validation seeds. Validation seed v draws what a plan run with
+``rng=v`` draws (the plan's defaults: R = 100 at the 270 nodes, held-out grid and random
+points, 3 cm mounting error), so seed v = the run's seed reproduces the run's own figure.
+
+One JSON line per (M, layout seed, validation seed) (``bench: "validation"``).
+``--summary`` prints, per M, each layout's σ range over the validation seeds, and the
+spread of σ over the layouts both as the benchmark measures it (each on its own run's
+draws) and with the validation noise averaged out (each layout's mean σ).
+
+Run: python benchmarks/bench_validation_noise.py [--anchors 8] [--validations 5]
+     [--workers 2] > validation_noise.jsonl
+Table: python benchmarks/bench_validation_noise.py --summary validation_noise.jsonl
+"""
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from _common import emit
+
+from placement.validation import validate_layout
+from placement.workers import WorkerPool, run_calls
+from simulation import Room, checks
+
+PLANS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "plan"
+
+
+def _validate(room, anchors, v):
+    r = validate_layout(room, anchors, rng=checks.substream(v, 4), mount_tolerance=0.03)
+    return {
+        "std": r["std"],
+        "p95": r["p95"],
+        "held_out_grid": r["held_out"]["grid"]["std"],
+        "mounting": r["mounting"]["std"],
+    }
+
+
+def _spread(values) -> float:
+    return float((np.max(values) - np.min(values)) / np.median(values))
+
+
+def summary(path: str) -> None:
+    """Per M: each layout's σ over the validation seeds (min–max, mean), and the spread of
+    σ over the layouts on their own runs' draws and with the noise averaged out."""
+    rows = [json.loads(line) for line in open(path)]
+    rows = [r for r in rows if r["bench"] == "validation"]
+    print("| M | layout seed: σ min–max (mean) over validation seeds (m) | range / mean "
+          "| spread on own draws | spread of mean σ |")  # fmt: skip
+    print("|---|---|---|---|---|")
+    for M in sorted({r["M"] for r in rows}):
+        seeds = sorted({r["seed"] for r in rows if r["M"] == M})
+        own, means, cells, ranges = [], [], [], []
+        for s in seeds:
+            sd = {r["validation_seed"]: r["std"] for r in rows if (r["M"], r["seed"]) == (M, s)}
+            v = np.array(list(sd.values()))
+            own.append(sd[s])
+            means.append(v.mean())
+            ranges.append((v.max() - v.min()) / v.mean())
+            cells.append(f"{s}: {v.min():.4f}–{v.max():.4f} ({v.mean():.4f})")
+        r_txt = f"{100 * min(ranges):.1f}–{100 * max(ranges):.1f} %"
+        print(f"| {M} | {'; '.join(cells)} | {r_txt} | {100 * _spread(own):.1f} % "
+              f"| {100 * _spread(means):.1f} % |")  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--anchors", type=int, nargs="+", default=[8])
+    ap.add_argument("--seeds", type=int, default=5, help="saved plans M{M}_s0 … per M")
+    ap.add_argument("--validations", type=int, default=5)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--summary", metavar="JSONL", help="print the table of a finished run")
+    args = ap.parse_args()
+    if args.summary:
+        summary(args.summary)
+        return
+    room = Room.techtile()
+    with WorkerPool(args.workers) as ex:
+        for M in args.anchors:
+            for seed in range(args.seeds):
+                anchors = json.loads((PLANS / f"M{M}_s{seed}.json").read_text())["anchors"]
+                calls = [(_validate, (room, anchors, v)) for v in range(args.validations)]
+                for v, r in enumerate(run_calls(ex, calls)):
+                    emit("validation", M=M, seed=seed, validation_seed=v, anchors=anchors, **r)
+
+
+if __name__ == "__main__":
+    main()
