@@ -716,6 +716,67 @@ def _wrong_type_cases(tmp: Path) -> None:
     )
 
 
+def _second_sweep_cases() -> None:
+    """Cases a later sweep of the public API found accepted or failing deep inside."""
+    from simulation import Chirp, Receiver
+    from simulation.multipath import compute_paths
+    from simulation.received import received_windows
+
+    cand = placement.candidate_grid(ROOM, 0.5)
+    twice = np.vstack([cand[[0, 5, 10, 15, 20]], cand[:1]])
+    one = NODES[None]
+    geometry = [
+        ("from_uv(index 7)", "index", lambda: placement.from_uv(ROOM, [7, 0], [[0.5] * 2] * 2)),
+        ("from_uv(uv 1e6)", "uv", lambda: placement.from_uv(ROOM, [0], [[1e6, 0.5]])),
+        ("from_uv(uv None)", "uv", lambda: placement.from_uv(ROOM, [0], None)),
+        ("exhaustive_search(repeated candidate)", "candidates",
+         lambda: placement.exhaustive_search(ROOM, 6, candidates=twice, nodes=NODES)),
+        ("relax_select(repeated candidate)", "candidates",
+         lambda: placement.relax_select(ROOM, 6, candidates=twice, nodes=NODES)),
+        ("seed_then_pso(nodes outside)", "nodes",
+         lambda: seed_then_pso(ROOM, 4, nodes=[[9.0, 1, 1]], **PLAN_KW)),
+        ("PEBCost(nodes outside)", "nodes", lambda: placement.PEBCost(ROOM, nodes=[[9.0, 1, 1]])),
+        ("PEBCost(nodes empty)", "nodes", lambda: placement.PEBCost(ROOM, nodes=np.zeros((0, 3)))),
+        ("DrawsCost(nodes empty)", "nodes", lambda: placement.DrawsCost(ROOM, np.zeros((0, 3, 3)))),
+        ("on_surfaces(tol nan)", "tol", lambda: placement.on_surfaces(ROOM, A, tol=math.nan)),
+        ("Room(keepouts=5)", "keepouts", lambda: Room(keepouts=5)),
+    ]  # fmt: skip
+    physics = [
+        ("Receiver(window=33)", "window", lambda: Receiver(window=33)),
+        ("dsp chirp above fs/2", "chirp",
+         lambda: simulate_ranges(ROOM, A, NODES, chirp=Chirp(f0=1e6, f1=9e5))),
+        ("high-pass cutoff 1e-9 Hz", "highpass_cutoff",
+         lambda: simulate_ranges(ROOM, A, NODES, receiver=Receiver(highpass_cutoff=1e-9))),
+        ("received_windows(speed_of_sound 0)", "speed_of_sound",
+         lambda: received_windows(compute_paths(ROOM, A, NODES[:2]), 0.0)),
+        ("calibrated_sigma(no errors)", "range_errors",
+         lambda: analysis.calibrated_sigma(np.zeros((0, 5, 4)), method="mad")),
+        ("range_std(no realizations)", "range_errors",
+         lambda: analysis.range_std(np.zeros((0, 5, 4)))),
+        ("DrawsCost(exact_draws 2.5)", "exact_draws",
+         lambda: placement.DrawsCost(ROOM, one, exact_draws=2.5)),
+        ("DrawsCost(mount_tolerance nan)", "mount_tolerance",
+         lambda: placement.DrawsCost(ROOM, one, mount_tolerance=math.nan)),
+    ]  # fmt: skip
+    wrong = [
+        ("PEBCost('x')", "room", lambda: placement.PEBCost("x")),
+        ("SimulatedCost(statistic list)", "statistic",
+         lambda: placement.SimulatedCost(statistic=["variance"])),
+        ("SearchOptions(fine_spacings 0.2)", "fine_spacings",
+         lambda: placement.SearchOptions(fine_spacings=0.2)),
+        ("relax_select(solver_opts bogus)", "solver_opts",
+         lambda: placement.relax_select(ROOM, 4, spacing=1.6, solver_opts={"bogus": 1})),
+        ("compute_paths(images 5)", "images", lambda: compute_paths(ROOM, A, NODES, images=5)),
+        ("evaluate_layout(receiver 'r')", "receiver",
+         lambda: evaluate_layout(ROOM, A, nodes=NODES, receiver="r")),
+        ("sweep(on_row 'x')", "on_row",
+         lambda: placement.sweep(ROOM, anchors=[4], on_row="x", **PLAN_KW)),
+    ]  # fmt: skip
+    for category, cases in (("geometry", geometry), ("physics", physics), ("wrong-type", wrong)):
+        for label, name, fn in cases:
+            api(category, label, name, fn)
+
+
 def build_api_cases(tmp: Path) -> None:
     """Every API case, by kind of bad input."""
     _simulation_count_cases()
@@ -730,6 +791,7 @@ def build_api_cases(tmp: Path) -> None:
     _signal_physics_cases()
     _toml_library_cases(tmp)
     _wrong_type_cases(tmp)
+    _second_sweep_cases()
 
 
 def build_neighbour_cases() -> None:
