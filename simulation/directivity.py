@@ -9,6 +9,8 @@ from simulation import checks
 
 def cardioid(cos_theta: np.ndarray) -> np.ndarray:
     """Cardioid amplitude gain g(θ) = ½(1 + cos θ), from cos θ (any shape)."""
+    if cos_theta is None:  # np.asarray(None, dtype=float) is NaN, not an error
+        raise ValueError("cos_theta: must be an array of cosines in [-1, 1], got None")
     return 0.5 * (1.0 + np.asarray(cos_theta, dtype=float))
 
 

@@ -601,3 +601,11 @@ def test_received_windows_checks_the_speed_of_sound_and_the_images():
         refused("speed_of_sound", lambda c=c: received_windows(paths, c))
     refused("paths", lambda: received_windows(None, 343.0))
     refused("images", lambda: compute_paths(ROOM, A, NODES[:2], images=5))
+
+
+def test_reference_nodes_names_grid_shape_and_cardioid_refuses_none():
+    from simulation.directivity import cardioid
+    from simulation.noise import reference_nodes
+
+    refused("grid_shape", lambda: reference_nodes(ROOM, A, grid_shape=(0, 1, 1)))
+    refused("cos_theta", lambda: cardioid(None))
