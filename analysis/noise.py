@@ -98,6 +98,7 @@ class PhysicalRangeNoise:
         if not isinstance(self.room, Room):
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
+        object.__setattr__(self, "grid_shape", checks.grid_shape("grid_shape", self.grid_shape))
         chirp, receiver = signal_chain(self.chirp, self.receiver)  # None: the defaults
         object.__setattr__(self, "chirp", chirp)
         object.__setattr__(self, "receiver", receiver)

@@ -23,22 +23,12 @@ from pathlib import Path
 
 import numpy as np
 from _common import emit
+from bench_candidates import validation_figures
 
-from placement.validation import validate_layout
 from placement.workers import WorkerPool, run_calls
-from simulation import Room, checks
+from simulation import Room
 
 PLANS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "plan"
-
-
-def _validate(room, anchors, v):
-    r = validate_layout(room, anchors, rng=checks.substream(v, 4), mount_tolerance=0.03)
-    return {
-        "std": r["std"],
-        "p95": r["p95"],
-        "held_out_grid": r["held_out"]["grid"]["std"],
-        "mounting": r["mounting"]["std"],
-    }
 
 
 def _spread(values) -> float:
@@ -84,7 +74,7 @@ def main() -> None:
         for M in args.anchors:
             for seed in range(args.seeds):
                 anchors = json.loads((PLANS / f"M{M}_s{seed}.json").read_text())["anchors"]
-                calls = [(_validate, (room, anchors, v)) for v in range(args.validations)]
+                calls = [(validation_figures, (room, anchors, v)) for v in range(args.validations)]
                 for v, r in enumerate(run_calls(ex, calls)):
                     emit("validation", M=M, seed=seed, validation_seed=v, anchors=anchors, **r)
 

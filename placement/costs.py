@@ -48,7 +48,7 @@ class SimulatedCost:
         checks.count("realizations", self.realizations, low=1, high=100_000)
         room = as_room(self.room)
         if self.nodes is not None:
-            checks.inside("nodes", checks.points("nodes", self.nodes), room.size)
+            room.check_nodes(self.nodes)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator) -> float:
         from simulation.evaluation import evaluate_layout
@@ -90,9 +90,7 @@ class DrawsCost:
         checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
         room = as_room(self.room)
         nodes = checks.reals("nodes", self.nodes, shape=(None, None, 3))
-        if nodes.shape[0] < 1 or nodes.shape[1] < 1:
-            raise ValueError(f"nodes: expected (D >= 1, P >= 1, 3), got {nodes.shape}")
-        checks.inside("nodes", nodes, room.size)
+        room.check_nodes(nodes.reshape(-1, 3))
         checks.count("exact_draws", self.exact_draws, low=0, high=nodes.shape[0])
         checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
 
@@ -140,7 +138,7 @@ class PEBCost:
         checks.real("sigma", self.sigma, low=0.0, high=10.0, low_open=True, unit="m")
         room = as_room(self.room)
         if self.nodes is not None:
-            checks.inside("nodes", checks.points("nodes", self.nodes), room.size)
+            room.check_nodes(self.nodes)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
         nodes = self.room.grid() if self.nodes is None else self.nodes

@@ -630,9 +630,7 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     seeds = kw["seeds"]
     if isinstance(seeds, str) and seeds != "auto":
         raise ValueError(f"seeds: expected 'auto', None or an array of layouts, got {seeds!r}")
-    nodes = None if kw["nodes"] is None else checks.points("nodes", kw["nodes"])
-    if nodes is not None:
-        checks.inside("nodes", nodes, room.size)
+    nodes = None if kw["nodes"] is None else room.check_nodes(kw["nodes"])
     checkpoint = kw["checkpoint"]
     table = kw["table"]
     if table is not None and not hasattr(table, "ranges"):

@@ -231,8 +231,7 @@ def _problem(room, anchors, sigma, objective, nodes, temperature) -> _Problem:
             " outside the keep-outs (use placement.project)"
         )
     checks.choice("objective", objective, OBJECTIVES)
-    p = room.grid() if nodes is None else checks.points("nodes", nodes)
-    checks.inside("nodes", p, room.size)
+    p = room.grid() if nodes is None else room.check_nodes(nodes)
     s = checks.reals("sigma", sigma)
     s = np.full(M, float(s)) if s.ndim == 0 else s
     if s.shape != (M,) or not (np.all(np.isfinite(s)) and np.all(s > 0)):

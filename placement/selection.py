@@ -110,8 +110,7 @@ def design_inputs(
     if nodes is None:
         p = room.grid()
     else:
-        p = checks.points("nodes", nodes)
-        checks.inside("nodes", p, room.size)
+        p = room.check_nodes(nodes)
     s = checks.reals("sigma", sigma)
     if s.ndim == 0:
         s = np.full(N, float(s))

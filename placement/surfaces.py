@@ -222,11 +222,11 @@ def from_uv(room: Room, index, uv, tol: float = 1e-6) -> np.ndarray:
     hi = np.array([s.upper for s in surfs])[index]
     off = (uv < lo - tol) | (uv > hi + tol)
     if np.any(off):
-        k = np.argwhere(off.any(axis=-1))[0]
+        k = tuple(int(i) for i in np.argwhere(off.any(axis=-1))[0])
+        (u0, v0), (u1, v1) = lo[k], hi[k]
         raise ValueError(
-            f"uv: {uv[tuple(k)].tolist()} at index {k.tolist()} lies off surface "
-            f"{surfs[index[tuple(k)]].name!r} (u in [{lo[tuple(k)][0]:g}, {hi[tuple(k)][0]:g}], "
-            f"v in [{lo[tuple(k)][1]:g}, {hi[tuple(k)][1]:g}] m)"
+            f"uv: {uv[k].tolist()} at index {list(k)} lies off surface {surfs[index[k]].name!r} "
+            f"(u in [{u0:g}, {u1:g}], v in [{v0:g}, {v1:g}] m)"
         )
     out = np.empty((*index.shape, 3))
     for i, s in enumerate(surfs):

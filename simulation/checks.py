@@ -17,7 +17,7 @@ import math
 import numbers
 import os
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -126,6 +126,14 @@ def count(name: str, value: Any, *, low: int = 0, high: int | None = None) -> in
     if v < low or (high is not None and v > high):
         raise ValueError(f"{name}: must be {allowed}, got {v}")
     return v
+
+
+def grid_shape(name: str, value: Any) -> tuple[int, int, int]:
+    """Nodes per axis of a regular grid: 3 integers ≥ 1, returned as a tuple."""
+    if not isinstance(value, Sequence | np.ndarray) or len(value) != 3:
+        raise ValueError(f"{name}: expected 3 integers >= 1, got {describe(value)}")
+    nx, ny, nz = (count(name, n, low=1) for n in value)
+    return nx, ny, nz
 
 
 def real(

@@ -59,7 +59,7 @@ class RangingScene:
     ):
         self.room = room = as_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
-        self.nodes = room.grid() if nodes is None else _check_nodes(nodes, room)
+        self.nodes = room.grid() if nodes is None else room.check_nodes(nodes)
         self.chirp, self.receiver = signal_chain(chirp, receiver)
         self.snr_db = check_snr("snr_db", snr_db)
         checks.choice("precision", precision, PRECISIONS)
@@ -99,13 +99,6 @@ class RangingScene:
             r0 = self._to_ranges(self.windows)
             return np.broadcast_to(r0, (len(rngs), *r0.shape)).copy()
         return self._to_ranges(np.stack([self.noisy_windows(g) for g in rngs]))
-
-
-def _check_nodes(nodes, room: Room | None = None) -> np.ndarray:
-    p = checks.points("nodes", nodes)
-    if room is not None:
-        checks.inside("nodes", p, room.size)
-    return p
 
 
 def simulate_ranges(
@@ -356,7 +349,7 @@ def evaluate_layout(
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
     _check_workers(workers)
-    n_nodes = len(room.grid()) if nodes is None else len(_check_nodes(nodes, room))
+    n_nodes = len(room.grid()) if nodes is None else len(room.check_nodes(nodes))
     checks.check_size(
         "realizations",
         realizations * n_nodes * len(anchors) * BYTES_PER_RANGE,

@@ -41,10 +41,7 @@ def reference_nodes(room: Room, anchors, grid_shape=(9, 6, 5)) -> np.ndarray:
     a = checks.points("anchors", anchors)
     # the regular room grid even when the room has tag zones: the SNR reference is a
     # property of the room and its anchors, not of where tags are expected
-    try:
-        grid = room.grid(grid_shape)
-    except ValueError as exc:  # Room.grid calls it "shape"
-        raise ValueError(str(exc).replace("shape:", "grid_shape:", 1)) from None
+    grid = room.grid(checks.grid_shape("grid_shape", grid_shape))
     d = np.linalg.norm(grid[:, None, :] - a[None, :, :], axis=-1)  # (G, M)
     return grid[np.argmin(d, axis=0)]
 

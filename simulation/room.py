@@ -355,9 +355,7 @@ class Room:
             if self.zones:
                 return self.zone_grid()
             shape = (9, 6, 5)
-        if not isinstance(shape, Sequence | np.ndarray) or len(shape) != 3:
-            raise ValueError(f"shape: expected 3 integers >= 1, got {checks.describe(shape)}")
-        shape = tuple(checks.count("shape", n, low=1) for n in shape)
+        shape = checks.grid_shape("shape", shape)
         checks.check_size("shape", math.prod(shape) * 3 * 8 * 4, value=shape)
         m = self.node_margin
         axes = [
@@ -403,6 +401,13 @@ class Room:
             raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
         margin = checks.real("margin", margin, low=0.0, unit="m")
         return np.all((p >= margin) & (p <= np.array(self.size) - margin), axis=-1)
+
+    def check_nodes(self, nodes) -> np.ndarray:
+        """Validate evaluation nodes: (P, 3) finite, P ≥ 1, inside the room; returns them as
+        a float array, or raises ``ValueError`` naming ``nodes``."""
+        p = checks.points("nodes", nodes)
+        checks.inside("nodes", p, self.size)
+        return p
 
     def check_anchors(self, anchors, min_anchors: int = 4) -> np.ndarray:
         """Validate an anchor layout: (M, 3) finite, M ≥ ``min_anchors``, inside the room.
