@@ -508,7 +508,8 @@ def seed_then_pso(
     iterations: int | None = None,
     mount_tolerance: float = 0.03,
     finalists: int = 1,
-    finalist_draws: int = 8,
+    finalist_draws: int = 12,
+    finalist_exact_draws: int | None = None,
     validation: ValidationOptions | None = None,
     validate_realizations: int | None = None,
     realizations: int = 1,
@@ -541,7 +542,11 @@ def seed_then_pso(
     mount_tolerance : radius (m) of the in-plane mounting error in the scored draws and in
         the validation.
     finalists, finalist_draws : how many of the swarm's best distinct layouts, together
-        with the seeds, are scored on ``finalist_draws`` fresh draws before choosing.
+        with the seeds and the refined layout, are scored on ``finalist_draws`` fresh
+        draws before choosing.
+    finalist_exact_draws : how many of those draws keep the nodes and the planned points
+        exactly (None: all); the others move the nodes and mount the anchors within
+        ``mount_tolerance``, as the table's moved draws do.
     validation, validate_realizations : the validation's settings
         (:class:`placement.validation.ValidationOptions`); ``validate_realizations`` sets
         its ``realizations`` (0: no validation).
@@ -598,6 +603,7 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         iterations=(kw["iterations"], 1, 100_000),
         finalists=(kw["finalists"], 1, 1000),
         finalist_draws=(kw["finalist_draws"], 1, 1000),
+        finalist_exact_draws=(kw["finalist_exact_draws"], 0, 1000),
         validate_realizations=(kw["validate_realizations"], 0, 100_000),
         realizations=(kw["realizations"], 1, 10_000),
         workers=(kw["workers"], 1, 1024),
@@ -615,6 +621,13 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     # the local swarm works around seeds; without seeds it is the paper's swarm
     local = simulated and kw["seeds"] is not None
     swarm = _swarm_options(kw["options"], counts["particles"], counts["iterations"], local)
+    if counts["finalist_exact_draws"] is None:
+        counts["finalist_exact_draws"] = counts["finalist_draws"]
+    elif counts["finalist_exact_draws"] > counts["finalist_draws"]:
+        raise ValueError(
+            f"finalist_exact_draws: must be an integer in [0, {counts['finalist_draws']}] "
+            f"(finalist_draws) or None, got {counts['finalist_exact_draws']}"
+        )
     if counts["finalists"] > swarm.particles:
         raise ValueError(
             f"finalists: must be an integer in [1, {swarm.particles}] (the swarm's "
@@ -652,6 +665,7 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         "nodes": nodes,
         "finalists": counts["finalists"],
         "finalist_draws": counts["finalist_draws"],
+        "finalist_exact_draws": counts["finalist_exact_draws"],
         "executor": kw["executor"],
         "workers": counts["workers"] or executor_workers(kw["executor"]),
         "progress": checks.flag("progress", kw["progress"]),
@@ -787,8 +801,10 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
     costs only); a degenerate layout is never chosen."""
     anchors, chosen, final = res.anchors, res.cost, []
     if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts or refined):
-        # fresh draws mixed as the table's: half at the exact nodes, half moved
-        exact = max(1, run["finalist_draws"] // 2)
+        # new noise, by default at the exact nodes: the candidates already come from a
+        # search on moved draws, and the choice among near-equal optima needs the draws'
+        # variance low (BENCHMARKS.md, "The finalists' ceiling")
+        exact = run["finalist_exact_draws"]
         fresh = _draws_cost(room, run, run["finalist_draws"], exact, key=5, nodes_key=6)
         bar = _Bar(run["progress"], "finalists")
         final = choose_finalist(
@@ -839,6 +855,7 @@ def _settings(run: dict, summary: dict, clock: _Clock) -> dict[str, Any]:
         "mount_tolerance": run["mount_tolerance"],
         "finalists": run["finalists"],
         "finalist_draws": run["finalist_draws"],
+        "finalist_exact_draws": run["finalist_exact_draws"],
         "validation": dataclasses.asdict(run["validation"]),
         "validate_realizations": run["validation"].realizations,
         "sigma": run["sigma"],

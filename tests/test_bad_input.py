@@ -406,6 +406,7 @@ def files(tmp_path):
         (["plan", "--anchors", "3.5", "--out", "{t}/o"], "--anchors"),
         (["plan", "--particles", "1", "--out", "{t}/o"], "--particles"),
         (["plan", "--eval-timeout", "0", "--out", "{t}/o"], "--eval-timeout"),
+        (["plan", "--finalist-exact-draws", "13", "--out", "{t}/o"], "--finalist-exact-draws"),
         (["plan", "--workers", "-1", "--out", "{t}/o"], "--workers"),
         (["plan", "--validate-realizations", "1000000000", "--out", "{t}/o"], "--validate-"),
         (["evaluate", "--layout", "{t}/ok.json", "--realizations", "0", "--out", "{t}/o"], "--r"),

@@ -37,6 +37,8 @@ def refused(name, fn, within=5.0):
         ("M", 300),
         ("finalists", 1.5),
         ("finalist_draws", 0),
+        ("finalist_exact_draws", -1),
+        ("finalist_exact_draws", 13),
         ("validate_realizations", -1),
         ("realizations", True),
         ("sigma", "0.04"),

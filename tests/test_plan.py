@@ -89,6 +89,26 @@ def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws()
     assert any(d["cost"] != d["pso_cost"] for d in f)
 
 
+def test_the_finalists_draws_are_new_noise_at_the_exact_nodes_unless_asked_otherwise():
+    from simulation import checks
+
+    def fresh(draws, exact):
+        sets = node_draws(ROOM, NODES, draws, exact, checks.substream(0, 6))
+        return DrawsCost(ROOM, sets, exact_draws=exact, mount_tolerance=0.03,
+                         seed=checks.substream(0, 5))  # fmt: skip
+
+    res = _plan(finalist_draws=3, validate_realizations=0)
+    assert res.settings["finalist_exact_draws"] == 3
+    assert [d["cost"] for d in res.finalists] == [fresh(3, 3)(d["anchors"]) for d in res.finalists]
+    mixed = _plan(finalist_draws=3, finalist_exact_draws=1, validate_realizations=0)
+    assert [d["cost"] for d in mixed.finalists] == [
+        fresh(3, 1)(d["anchors"]) for d in mixed.finalists
+    ]
+    assert [d["cost"] for d in mixed.finalists] != [d["cost"] for d in res.finalists]
+    with pytest.raises(ValueError, match=r"finalist_exact_draws.*\[0, 3\]"):
+        _plan(finalist_draws=3, finalist_exact_draws=4)
+
+
 def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
     res = _plan()
     fresh = DrawsCost(ROOM, node_draws(ROOM, NODES, 2, 1, rng=1), exact_draws=1, seed=4)

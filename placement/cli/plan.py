@@ -59,7 +59,14 @@ def register(sub) -> None:
         help="best distinct swarm layouts scored, with the seeds and the refined layout, on "
         "fresh draws (1)",
     )
-    p.add_argument("--finalist-draws", type=int, default=8, help="fresh draws of the finalists (8)")
+    p.add_argument(
+        "--finalist-draws", type=int, default=12, help="fresh draws of the finalists (12)"
+    )
+    p.add_argument(
+        "--finalist-exact-draws",
+        type=int,
+        help="of those, draws at the exact nodes and planned points (default: all)",
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
         "--workers",
@@ -145,6 +152,10 @@ def _check_args(args, room):
     particles = args.particles or (LOCAL_SWARM.particles if not args.no_seeds else 15)
     checks.count("--finalists", args.finalists, low=1, high=particles)
     checks.count("--finalist-draws", args.finalist_draws, low=1, high=MAX_REALIZATIONS)
+    if args.finalist_exact_draws is not None:
+        checks.count(
+            "--finalist-exact-draws", args.finalist_exact_draws, low=0, high=args.finalist_draws
+        )
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
     if args.scheduler and args.workers > 0:
@@ -213,6 +224,7 @@ def run(args) -> int:
                 mount_tolerance=args.mount_tolerance,
                 finalists=args.finalists,
                 finalist_draws=args.finalist_draws,
+                finalist_exact_draws=args.finalist_exact_draws,
                 executor=executor,
                 workers=workers if executor is not None else 1,
                 rng=args.seed,
