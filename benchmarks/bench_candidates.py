@@ -15,13 +15,15 @@ each (M, seed), the candidate of each rule:
 - ``fresh_k``: the lowest variance over the first k exact and the first k moved fresh
   draws (k = ``--draws`` / 4: the plan's finalists; k = ``--draws`` / 2: all draws);
 - ``exact_k``, ``exact``: the lowest variance over the first k or all exact fresh draws;
+- ``moved``: the lowest variance over the moved fresh draws only;
 - ``oracle``: the lowest validated σ at the 270 nodes, which no rule can beat.
 The spread of σ over seeds under the oracle bounds what any choice among these candidates
 can reach.
 
 Run: python benchmarks/bench_candidates.py [--anchors 8 4] [--seeds 5] [--keep 8]
      [--draws 16] [--workers 2] > candidates.jsonl
-Tables: python benchmarks/bench_candidates.py --summary candidates.jsonl
+Tables: python benchmarks/bench_candidates.py --summary candidates.jsonl (the choices, then
+how noisy one fresh draw is, exact and moved, against the candidates' differences)
 """
 
 import argparse
@@ -104,6 +106,7 @@ def _choices(cands, draws) -> dict:
         rules[f"fresh_{k}"] = lambda c, k=k: _variance(c, exact[:k] + moved[:k])
     rules[f"exact_{half // 2}"] = lambda c: _variance(c, exact[: half // 2])
     rules["exact"] = lambda c: _variance(c, exact)
+    rules["moved"] = lambda c: _variance(c, moved)
     # the mean square (σ² + mean²) instead of the variance: does weighing the mean help P95?
     rules[f"rms_{half // 2}"] = lambda c: _mean_square(c, exact[: half // 2] + moved[: half // 2])
     rules["rms_exact"] = lambda c: _mean_square(c, exact)
@@ -111,8 +114,32 @@ def _choices(cands, draws) -> dict:
     out = {}
     for name, key in rules.items():
         c = min(cands, key=key)
-        out[name] = {k: c[k] for k in ("candidate", "std", "p95", "held_out_grid")}
+        out[name] = {
+            k: c[k]
+            for k in ("candidate", "std", "p95", "held_out_grid", "held_out_random", "mounting")
+        }
     return out
+
+
+def draw_noise(cands, draws) -> None:
+    """Print, per M, how much a candidate's variance varies from one fresh draw to the next
+    (standard deviation over its exact draws and over its moved draws, averaged over the
+    candidates, m²) against how far apart a run's candidates are (the standard deviation of
+    their validated σ², averaged over the runs)."""
+    half = draws // 2
+    print("| M | per-draw variance, exact draws: sd (m²) | moved draws: sd (m²) | moved / exact "
+          "| a run's candidates: sd of validated σ² (m²) |")  # fmt: skip
+    print("|---|---|---|---|---|")
+    for M in sorted({c["M"] for c in cands}):
+        mine = [c for c in cands if c["M"] == M]
+        per_draw = [np.asarray(c["fresh_meansq"]) - np.asarray(c["fresh_mean"]) ** 2 for c in mine]
+        ex = float(np.mean([np.std(v[:half], ddof=1) for v in per_draw]))
+        mv = float(np.mean([np.std(v[half:], ddof=1) for v in per_draw]))
+        runs = {c["seed"] for c in mine}
+        apart = np.mean(
+            [np.std([c["std"] ** 2 for c in mine if c["seed"] == s], ddof=1) for s in runs]
+        )
+        print(f"| {M} | {ex:.4f} | {mv:.4f} | {mv / ex:.1f} | {apart:.4f} |")
 
 
 def summary(path: str) -> None:
@@ -152,6 +179,26 @@ def summary(path: str) -> None:
             print(f"| {M} | {rule} | {cells} | {names} | {100 * spread:.1f} % | {below} of {n} |")
         below = sum(best[(M, r["seed"])] < first[(M, r["seed"])] for r in runs)
         print(f"| {M} | any | | | | {below} of {len(runs)} |")
+    print()
+    where_tags(choices)
+    print()
+    draw_noise(cands, draws)
+
+
+def where_tags(choices) -> None:
+    """Print, per M and rule, the mean over seeds of the chosen layouts' held-out grid,
+    random-point and mounting-error σ (m)."""
+    print("| M | rule | mean σ: 270 nodes | held-out grid | random points | mounting error |")
+    print("|---|---|---|---|---|---|")
+    for M in sorted({r["M"] for r in choices}):
+        runs = [r for r in choices if r["M"] == M]
+        for rule in ("fresh_4", "exact", "moved", "oracle"):
+            mean = {
+                k: np.mean([r[rule][k] for r in runs])
+                for k in ("std", "held_out_grid", "held_out_random", "mounting")
+            }
+            print(f"| {M} | {rule} | {mean['std']:.3f} | {mean['held_out_grid']:.3f} "
+                  f"| {mean['held_out_random']:.3f} | {mean['mounting']:.3f} |")  # fmt: skip
 
 
 def main() -> None:
