@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import platform
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -23,6 +24,12 @@ def best_time(fn, repeat: int = 5, number: int = 1) -> float:
             fn()
         best = min(best, (time.perf_counter() - t0) / number)
     return best
+
+
+def spread(values) -> float:
+    """The spread of values over seeds, as issue 12 measures it: (max − min) / median."""
+    v = [float(x) for x in values]
+    return (max(v) - min(v)) / statistics.median(v)
 
 
 def emit(name: str, **fields) -> None:

@@ -30,7 +30,7 @@ import argparse
 import json
 
 import numpy as np
-from _common import emit
+from _common import emit, spread
 
 from placement.costs import DrawsCost
 from placement.rangetable import node_draws
@@ -173,10 +173,9 @@ def summary(path: str) -> None:
                 f"{p['std']:.3f} / {p['p95']:.3f} ({p['held_out_grid']:.3f})" for p in picks
             )
             names = ", ".join(p["candidate"] for p in picks)
-            spread = (max(sd) - min(sd)) / float(np.median(sd))
             below = sum(p["std"] < first[(M, r["seed"])] for p, r in zip(picks, runs, strict=True))
-            n = len(runs)
-            print(f"| {M} | {rule} | {cells} | {names} | {100 * spread:.1f} % | {below} of {n} |")
+            tail = f"{100 * spread(sd):.1f} % | {below} of {len(runs)}"
+            print(f"| {M} | {rule} | {cells} | {names} | {tail} |")
         below = sum(best[(M, r["seed"])] < first[(M, r["seed"])] for r in runs)
         print(f"| {M} | any | | | | {below} of {len(runs)} |")
     print()

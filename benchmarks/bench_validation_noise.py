@@ -22,17 +22,13 @@ import json
 from pathlib import Path
 
 import numpy as np
-from _common import emit
+from _common import emit, spread
 from bench_candidates import validation_figures
 
 from placement.workers import WorkerPool, run_calls
 from simulation import Room
 
 PLANS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "plan"
-
-
-def _spread(values) -> float:
-    return float((np.max(values) - np.min(values)) / np.median(values))
 
 
 def summary(path: str) -> None:
@@ -54,8 +50,8 @@ def summary(path: str) -> None:
             ranges.append((v.max() - v.min()) / v.mean())
             cells.append(f"{s}: {v.min():.4f}–{v.max():.4f} ({v.mean():.4f})")
         r_txt = f"{100 * min(ranges):.1f}–{100 * max(ranges):.1f} %"
-        print(f"| {M} | {'; '.join(cells)} | {r_txt} | {100 * _spread(own):.1f} % "
-              f"| {100 * _spread(means):.1f} % |")  # fmt: skip
+        print(f"| {M} | {'; '.join(cells)} | {r_txt} | {100 * spread(own):.1f} % "
+              f"| {100 * spread(means):.1f} % |")  # fmt: skip
 
 
 def main() -> None:

@@ -13,7 +13,7 @@ import statistics
 import sys
 from pathlib import Path
 
-from _common import PAPER_TABLE1
+from _common import PAPER_TABLE1, spread
 
 
 def _runs(d: Path, suffix: str = "") -> dict[int, list[dict]]:
@@ -43,7 +43,7 @@ def table1(runs: dict[int, list[dict]]) -> None:
         paper = f"{p['std']:.3f} / {p['mean']:.3f} / {p['p95']:.3f}" if p else "—"
         print(
             f"| {M} | {paper} | {cells} | {med:.3f} / {statistics.median(q):.3f} "
-            f"| {max(s):.3f} / {max(q):.3f} | {(max(s) - min(s)) / med:.1%} "
+            f"| {max(s):.3f} / {max(q):.3f} | {spread(s):.1%} "
             f"| {below} of {len(rs)} |"
         )
 

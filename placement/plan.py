@@ -802,8 +802,8 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
     anchors, chosen, final = res.anchors, res.cost, []
     if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts or refined):
         # new noise, by default at the exact nodes: the candidates already come from a
-        # search on moved draws, and the choice among near-equal optima needs the draws'
-        # variance low (BENCHMARKS.md, "The finalists' choice")
+        # search whose draws include moved ones, and the choice among near-equal optima
+        # needs draws that vary little (BENCHMARKS.md, "The finalists' choice")
         exact = run["finalist_exact_draws"]
         fresh = _draws_cost(room, run, run["finalist_draws"], exact, key=5, nodes_key=6)
         bar = _Bar(run["progress"], "finalists")

@@ -37,7 +37,13 @@ import numpy as np
 
 from placement.rangetable import RangeTable, extend_table, range_table, table_costs
 from placement.result import LayoutResult
-from placement.surfaces import candidate_grid, mounting_surfaces, project, surface_index
+from placement.surfaces import (
+    candidate_grid,
+    mounting_surfaces,
+    new_points,
+    project,
+    surface_index,
+)
 from placement.workers import run_jobs
 from simulation import checks
 from simulation.room import Room
@@ -176,18 +182,6 @@ def fine_points(room: Room, anchors: np.ndarray, spacing: float, steps: int) -> 
         p[:, uv[1]] += dv.ravel()
         out.append(project(room, p))
     return np.concatenate(out)
-
-
-def new_points(existing: np.ndarray, points: np.ndarray, tol: float = 1e-3) -> np.ndarray:
-    """The points (n, 3) farther than ``tol`` (m) from every existing point and from each
-    other (first kept)."""
-    keep: list[np.ndarray] = []
-    base = np.asarray(existing, dtype=float).reshape(-1, 3)
-    for p in np.asarray(points, dtype=float).reshape(-1, 3):
-        if len(base) == 0 or np.min(np.linalg.norm(base - p, axis=1)) > tol:
-            keep.append(p)
-            base = np.vstack([base, p])
-    return np.array(keep).reshape(-1, 3)
 
 
 @dataclass(frozen=True)

@@ -272,14 +272,25 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
             empty = ~inside.any(axis=0)
             p = np.concatenate([p, (lo[empty] + hi[empty]) / 2])
         pts.append(p)
-    return _distinct(np.concatenate(pts, axis=0))
+    return new_points(np.empty((0, 3)), np.concatenate(pts, axis=0))
 
 
-def _distinct(points: np.ndarray, resolution: float = 1e-6) -> np.ndarray:
-    """The points (N, 3) without repeats (equal to ``resolution`` m), in their order."""
-    key = np.round(points / resolution).astype(np.int64)
-    _, first = np.unique(key, axis=0, return_index=True)
-    return points[np.sort(first)]
+def new_points(existing, points, tol: float = 1e-3) -> np.ndarray:
+    """The points (n, 3) farther than ``tol`` (m) from every existing point (k, 3) and from
+    each other (the first of a close pair kept), in their order."""
+    from scipy.spatial import cKDTree
+
+    base = np.asarray(existing, dtype=float).reshape(-1, 3)
+    p = np.asarray(points, dtype=float).reshape(-1, 3)
+    keep = np.ones(len(p), dtype=bool)
+    if len(p) and len(base):
+        keep &= cKDTree(base).query(p)[0] > tol
+    pairs = cKDTree(p).query_pairs(tol, output_type="ndarray") if len(p) > 1 else []
+    # in increasing order of the later point: its earlier partner's fate is already known
+    for i, j in sorted(map(tuple, pairs), key=lambda ij: (ij[1], ij[0])):
+        if keep[i]:
+            keep[j] = False
+    return p[keep]
 
 
 def area_counts(room: Room, M: int) -> np.ndarray:
