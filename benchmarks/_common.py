@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import platform
 import statistics
@@ -30,6 +31,29 @@ def spread(values) -> float:
     """The spread of values over seeds, as issue 12 measures it: (max − min) / median."""
     v = [float(x) for x in values]
     return (max(v) - min(v)) / statistics.median(v)
+
+
+def runs_parser(doc: str, anchors: list[int], seeds_help: str | None = None):
+    """The options of a benchmark over (M, seed) runs: ``--anchors`` (default ``anchors``),
+    ``--seeds`` (5: seeds 0–4), ``--workers`` (2) and ``--summary JSONL`` (print the
+    tables of finished runs instead of running)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--anchors", type=int, nargs="+", default=anchors)
+    ap.add_argument("--seeds", type=int, default=5, help=seeds_help)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument(
+        "--summary", metavar="JSONL", nargs="+", help="print the tables of finished runs"
+    )
+    return ap
+
+
+def read_lines(paths: list[str]) -> list[dict]:
+    """The JSON lines of the files ``paths``, in order."""
+    rows = []
+    for path in paths:
+        with open(path) as f:
+            rows += [json.loads(line) for line in f if line.strip()]
+    return rows
 
 
 def emit(name: str, **fields) -> None:

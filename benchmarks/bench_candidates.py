@@ -26,11 +26,8 @@ Tables: python benchmarks/bench_candidates.py --summary candidates.jsonl (the ch
 how noisy one fresh draw is, exact and moved, against the candidates' differences)
 """
 
-import argparse
-import json
-
 import numpy as np
-from _common import emit, spread
+from _common import emit, read_lines, runs_parser, spread
 
 from placement.costs import DrawsCost
 from placement.rangetable import node_draws
@@ -142,12 +139,12 @@ def draw_noise(cands, draws) -> None:
         print(f"| {M} | {ex:.4f} | {mv:.4f} | {mv / ex:.1f} | {apart:.4f} |")
 
 
-def summary(path: str) -> None:
+def summary(paths: list[str]) -> None:
     """Print, per M and rule, each seed's choice (σ / P95 at the 270 nodes, held-out grid σ),
     the spread of σ over seeds (max − min over the median) and in how many seeds the choice
     validates below the search's best layout (``search-1``), as a markdown table; the row
     "any" counts the seeds where some candidate does."""
-    rows = [json.loads(line) for line in open(path)]
+    rows = read_lines(paths)
     cands = [r for r in rows if r["bench"] == "candidate"]
     keys = sorted({(r["M"], r["seed"]) for r in cands})
     draws = len(cands[0]["fresh_mean"])
@@ -201,13 +198,9 @@ def where_tags(choices) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--anchors", type=int, nargs="+", default=[8, 4])
-    ap.add_argument("--seeds", type=int, default=5)
+    ap = runs_parser(__doc__, anchors=[8, 4])
     ap.add_argument("--keep", type=int, default=8)
     ap.add_argument("--draws", type=int, default=16)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--summary", metavar="JSONL", help="print the tables of a finished run")
     args = ap.parse_args()
     if args.summary:
         summary(args.summary)

@@ -17,12 +17,11 @@ Run: python benchmarks/bench_validation_noise.py [--anchors 8] [--validations 5]
 Table: python benchmarks/bench_validation_noise.py --summary validation_noise.jsonl
 """
 
-import argparse
 import json
 from pathlib import Path
 
 import numpy as np
-from _common import emit, spread
+from _common import emit, read_lines, runs_parser, spread
 from bench_candidates import validation_figures
 
 from placement.workers import WorkerPool, run_calls
@@ -31,10 +30,10 @@ from simulation import Room
 PLANS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "plan"
 
 
-def summary(path: str) -> None:
+def summary(paths: list[str]) -> None:
     """Per M: each layout's σ over the validation seeds (min–max, mean), and the spread of
     σ over the layouts on their own runs' draws and with the noise averaged out."""
-    rows = [json.loads(line) for line in open(path)]
+    rows = read_lines(paths)
     rows = [r for r in rows if r["bench"] == "validation"]
     print("| M | layout seed: σ min–max (mean) over validation seeds (m) | range / mean "
           "| spread on own draws | spread of mean σ |")  # fmt: skip
@@ -55,12 +54,8 @@ def summary(path: str) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--anchors", type=int, nargs="+", default=[8])
-    ap.add_argument("--seeds", type=int, default=5, help="saved plans M{M}_s0 … per M")
+    ap = runs_parser(__doc__, anchors=[8], seeds_help="saved plans M{M}_s0 … per M")
     ap.add_argument("--validations", type=int, default=5)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--summary", metavar="JSONL", help="print the table of a finished run")
     args = ap.parse_args()
     if args.summary:
         summary(args.summary)

@@ -1,0 +1,135 @@
+"""The search's settings against the spread of seed_then_pso's σ over seeds.
+
+For each seed, the range table is built once, exactly as ``seed_then_pso(room, M,
+rng=seed)`` builds it (it depends on the seed, not on M), and shared by the runs at every
+M; each run is ``seed_then_pso`` with its defaults except the search's settings given as
+``--search`` (a JSON object of :class:`placement.simselect.SearchOptions` fields). With
+``--search '{}'`` the runs are the default plans of ``bench_pso.py`` (same layouts).
+
+With ``--table-seed T`` every run searches seed T's table instead of its own: the search,
+swarm, finalists and validation keep the run's seed, so the spread over seeds is then
+the spread without the table's own noise.
+
+One JSON line per run: the validated σ / mean / P95 at the 270 nodes (R = 100, the run's
+own validation noise), σ at the held-out grid, the random points and under mounting
+error, the chosen finalist, the finalists' fresh-draw costs (m²) and the seconds of every
+phase (the table's seconds apart: it is built once per seed). ``--summary JSONL`` prints
+the table of BENCHMARKS.md ("Levers on the spread") from such files (several may be
+given; the seeded runs of ``bench_pso.py``'s ``bench_plan.jsonl`` count as the default
+settings).
+
+Run: python benchmarks/bench_search_levers.py [--search '{"evaluations": 9000}']
+     [--anchors 4 6 8 10] [--seeds 5] [--table-seed T] [--workers 2]
+"""
+
+import json
+import statistics
+import time
+
+import numpy as np
+from _common import PAPER_TABLE1, emit, read_lines, runs_parser, spread
+
+from placement.plan import build_table, seed_then_pso
+from placement.simselect import SearchOptions
+from placement.workers import WorkerPool
+from simulation import Room, checks
+
+
+def run(room, M, seed, table, options, ex, workers) -> dict:
+    t0 = time.perf_counter()
+    res = seed_then_pso(
+        room, M, rng=seed, search=options, table=table, executor=ex, workers=workers,
+        progress=False,
+    )  # fmt: skip
+    v = res.validation
+    return dict(
+        M=M,
+        seed=seed,
+        std=v["std"],
+        mean=v["mean"],
+        p95=v["p95"],
+        held_out_grid_std=v["held_out"]["grid"]["std"],
+        held_out_random_std=v["held_out"]["random"]["std"],
+        mounting_std=v["mounting"]["std"],
+        chosen=next(
+            (f["source"] for f in res.finalists if np.array_equal(f["anchors"], res.anchors)),
+            "swarm",
+        ),
+        finalists={f["source"]: f["cost"] for f in res.finalists},
+        anchors=res.anchors.tolist(),
+        seconds=time.perf_counter() - t0,
+        timings=res.timings,
+    )
+
+
+def _lines(paths: list[str]):
+    """The runs of ``paths``; the seeded runs of ``bench_pso.py`` (``bench_plan.jsonl``)
+    are the default settings on each seed's own table."""
+    for r in read_lines(paths):
+        if r["bench"] == "plan_run" and r.get("swarm") == "seeded":
+            yield {**r, "search": {}, "table_seed": None}
+        elif r["bench"] == "search_levers":
+            yield r
+
+
+def summary(paths: list[str]) -> None:
+    """Per (search settings, table seed) and M: σ per seed, median, worst, spread, runs
+    below Table I on σ and P95, and the mean σ where the tags will be."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in _lines(paths):
+        tseed = -1 if r["table_seed"] is None else r["table_seed"]
+        key = (json.dumps(r["search"], sort_keys=True), tseed, r["M"])
+        groups.setdefault(key, []).append(r)
+    print(
+        "| search | table | M | σ per seed (m) | median | worst | spread | below Table I "
+        "| mean σ: held-out grid / random points / mounting error (m) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    # the default settings first, then each setting on its own tables before a shared one
+    for (search, tseed, M), rs in sorted(groups.items(), key=lambda g: (g[0][0] != "{}", g[0])):
+        rs = sorted(rs, key=lambda r: r["seed"])
+        s = [r["std"] for r in rs]
+        p = PAPER_TABLE1[M]
+        below = sum(r["std"] < p["std"] and r["p95"] < p["p95"] for r in rs)
+        where = " / ".join(
+            f"{statistics.mean(r[k] for r in rs):.3f}"
+            for k in ("held_out_grid_std", "held_out_random_std", "mounting_std")
+        )
+        table = "own" if tseed < 0 else f"seed {tseed}"
+        print(
+            f"| `{search}` | {table} | {M} | {', '.join(f'{x:.3f}' for x in s)} "
+            f"| {statistics.median(s):.3f} | {max(s):.3f} | {spread(s):.1%} "
+            f"| {below} of {len(rs)} | {where} |"
+        )
+
+
+def main() -> None:
+    ap = runs_parser(__doc__, anchors=[4, 6, 8, 10])
+    ap.add_argument("--search", default="{}", help="SearchOptions fields as a JSON object")
+    ap.add_argument("--table-seed", type=int, help="every run searches this seed's table")
+    args = ap.parse_args()
+    if args.summary:
+        summary(args.summary)
+        return
+    fields = json.loads(args.search)
+    options = SearchOptions(**fields)
+    room = Room.techtile()
+    with WorkerPool(max_workers=args.workers) as ex:
+        table = None
+        for seed in range(args.seeds):
+            tseed = seed if args.table_seed is None else args.table_seed
+            if table is None or args.table_seed is None:
+                t0 = time.perf_counter()
+                # the table seed_then_pso(rng=tseed) builds: stream 1 of its seed
+                table = build_table(room, options, None, checks.substream(tseed, 1), ex)
+                table_seconds = time.perf_counter() - t0
+            for M in args.anchors:
+                r = run(room, M, seed, table, options, ex, args.workers)
+                emit(
+                    "search_levers", search=fields, table_seed=args.table_seed,
+                    table_seconds=table_seconds, **r,
+                )  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
