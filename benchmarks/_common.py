@@ -35,8 +35,8 @@ def spread(values) -> float:
 
 def runs_parser(doc: str, anchors: list[int], seeds_help: str | None = None):
     """The options of a benchmark over (M, seed) runs: ``--anchors`` (default ``anchors``),
-    ``--seeds`` (5: seeds 0–4), ``--workers`` (2) and ``--summary JSONL`` (print the
-    tables of finished runs instead of running)."""
+    ``--seeds`` (5: seeds 0–4), ``--workers`` (2) and ``--summary JSONL [JSONL ...]``
+    (print the tables of the finished runs in those files instead of running)."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--anchors", type=int, nargs="+", default=anchors)
     ap.add_argument("--seeds", type=int, default=5, help=seeds_help)

@@ -8,7 +8,7 @@ M; each run is ``seed_then_pso`` with its defaults except the search's settings 
 
 With ``--table-seed T`` every run searches seed T's table instead of its own: the search,
 swarm, finalists and validation keep the run's seed, so the spread over seeds is then
-the spread without the table's own noise.
+what the run's other random choices make of one table.
 
 One JSON line per run: the validated σ / mean / P95 at the 270 nodes (R = 100, the run's
 own validation noise), σ at the held-out grid, the random points and under mounting
