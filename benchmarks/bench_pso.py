@@ -30,11 +30,11 @@ import numpy as np
 from _common import emit
 
 from placement import PSOOptions
-from placement.plan import seed_then_pso
+from placement.plan import seed_then_pso, stream
 from placement.serialization import to_jsonable
 from placement.validation import validate_layout
 from placement.workers import WorkerPool
-from simulation import Room, checks
+from simulation import Room
 
 
 def _summary(v: dict) -> dict:
@@ -49,7 +49,7 @@ def _summary(v: dict) -> dict:
 
 def _validation_rng(res) -> int:
     """The validation stream of a run (as seed_then_pso derives it)."""
-    return checks.substream(res.settings["seed"], 4)
+    return stream(res.settings["seed"], "validation")
 
 
 def run(room, M, seed, args, ex, unseeded=False) -> dict:
@@ -92,7 +92,7 @@ def baseline(room, M, seed, folder: Path, ex) -> dict | None:
     if not path.exists():
         return None
     anchors = np.array(json.loads(path.read_text())["anchors"])
-    rng = checks.substream(seed, 4)  # the validation stream of seed_then_pso(rng=seed)
+    rng = stream(seed, "validation")
     v = validate_layout(room, anchors, rng=rng, executor=ex)
     return {"source": str(path), "anchors": anchors.tolist(), **_summary(v)}
 

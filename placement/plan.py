@@ -54,6 +54,26 @@ logger = logging.getLogger(__name__)
 #: random layouts screened by mean PEB for the "auto" seeds, and how many are kept
 RANDOM_SCREEN, RANDOM_KEEP = 512, 2
 
+#: the random streams of a run (:func:`stream`): the range table (whose node sets the
+#: swarm's draws share), the swarm's noise and mounting errors, the search's chains, the
+#: validation, the finalists' noise and mounting errors, the finalists' node sets, and the
+#: refinement's descents
+STREAMS = {
+    "table": 1,
+    "swarm": 2,
+    "search": 3,
+    "validation": 4,
+    "finalists": 5,
+    "finalist_nodes": 6,
+    "refinement": 7,
+}
+
+
+def stream(seed: int, name: str) -> int:
+    """The int seed of the stream ``name`` (:data:`STREAMS`) of the run
+    ``seed_then_pso(rng=seed)`` (``seed``: its int seed, ``settings["seed"]``)."""
+    return checks.substream(seed, STREAMS[name])
+
 
 @dataclass
 class SeedLayout:
@@ -323,14 +343,15 @@ def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes
 
 
 def build_table(
-    room: Room, options: SearchOptions, nodes, rng, executor=None, progress: bool = False
+    room: Room, options: SearchOptions, nodes, seed: int, executor=None, progress: bool = False
 ):
-    """The range table of a run (:func:`placement.simselect.search_table`), with a
-    progress bar."""
+    """The range table of the run ``seed_then_pso(room, M, rng=seed, search=options,
+    nodes=nodes)`` (the same for every M; :func:`placement.simselect.search_table` on the
+    run's stream "table"), with a progress bar."""
     from placement.simselect import search_table
 
     bar = _Bar(progress, "range table")
-    table = search_table(room, options, nodes, rng, executor, bar.update)
+    table = search_table(room, options, nodes, stream(seed, "table"), executor, bar.update)
     bar.close()
     return table
 
@@ -675,16 +696,17 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     }
 
 
-def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: int, nodes_key: int):
-    """A :class:`DrawsCost` of the run's statistic over ``draws`` scene draws."""
+def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: str, nodes_key: str):
+    """A :class:`DrawsCost` of the run's statistic over ``draws`` scene draws, its noise
+    from the run's stream ``key`` and its node sets from ``nodes_key``."""
     grid = room.grid() if run["nodes"] is None else run["nodes"]
-    sets = node_draws(room, grid, draws, exact, checks.substream(run["entropy"], nodes_key))
+    sets = node_draws(room, grid, draws, exact, stream(run["entropy"], nodes_key))
     return DrawsCost(
         room,
         sets,
         exact_draws=exact,
         mount_tolerance=run["mount_tolerance"],
-        seed=checks.substream(run["entropy"], key),
+        seed=stream(run["entropy"], key),
         statistic=run["cost"],
         precision=run["search"].precision,
     )
@@ -692,15 +714,10 @@ def _draws_cost(room: Room, run: dict, draws: int, exact: int, key: int, nodes_k
 
 def _table(room: Room, run: dict):
     """The run's range table: the one given, else built once (its draws' node sets are
-    those of the swarm's cost: stream 1 of the run)."""
+    those of the swarm's cost: the run's stream "table")."""
     if run.get("table") is None:
         run["table"] = build_table(
-            room,
-            run["search"],
-            run["nodes"],
-            checks.substream(run["entropy"], 1),
-            run["executor"],
-            run["progress"],
+            room, run["search"], run["nodes"], run["entropy"], run["executor"], run["progress"]
         )
     return run["table"]
 
@@ -716,7 +733,7 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
             statistic=run["cost"],
             options=run["search"],
             nodes=run["nodes"],
-            rng=checks.substream(run["entropy"], 3),
+            rng=stream(run["entropy"], "search"),
             sigma=run["sigma"],
             executor=run["executor"],
             workers=run["workers"],
@@ -745,7 +762,7 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
     s = run["search"]
     cost = run["cost_fn"]
     if run["simulated"]:
-        cost = _draws_cost(room, run, s.draws, s.exact_draws, key=2, nodes_key=1)
+        cost = _draws_cost(room, run, s.draws, s.exact_draws, key="swarm", nodes_key="table")
         if run.get("table") is not None:  # the table's own draws: common random numbers
             cost = dataclasses.replace(cost, nodes=run["table"].nodes)
     initial = np.stack([x.anchors for x in seed_layouts]) if seed_layouts else None
@@ -786,7 +803,7 @@ def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
         starts,
         statistic=run["cost"],
         options=opt,
-        rng=checks.substream(run["entropy"], 7),
+        rng=stream(run["entropy"], "refinement"),
         executor=run["executor"],
         workers=run["workers"],
     )
@@ -805,7 +822,9 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
         # search whose draws include moved ones, and the choice among near-equal optima
         # needs draws that vary little (BENCHMARKS.md, "The finalists' choice")
         exact = run["finalist_exact_draws"]
-        fresh = _draws_cost(room, run, run["finalist_draws"], exact, key=5, nodes_key=6)
+        fresh = _draws_cost(
+            room, run, run["finalist_draws"], exact, key="finalists", nodes_key="finalist_nodes"
+        )
         bar = _Bar(run["progress"], "finalists")
         final = choose_finalist(
             res, seed_layouts, fresh, run["finalists"], run["executor"], bar.update, refined
@@ -826,7 +845,7 @@ def _validate(room: Room, run: dict, anchors, success: bool, clock: _Clock) -> d
         out = validate_layout(
             room,
             anchors,
-            rng=checks.substream(run["entropy"], 4),
+            rng=stream(run["entropy"], "validation"),
             options=run["validation"],
             mount_tolerance=run["mount_tolerance"],
             nodes=run["nodes"],
