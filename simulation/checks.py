@@ -25,6 +25,7 @@ import numpy as np
 
 __all__ = [
     "anchor_rank",
+    "rank_of_spread",
     "check_size",
     "choice",
     "count",
@@ -421,8 +422,13 @@ def anchor_rank(anchors, tol: float = MIN_ANCHOR_DISTANCE) -> np.ndarray | int:
     do not count."""
     a = np.asarray(anchors, dtype=float)
     c = a - a.mean(axis=-2, keepdims=True)
-    s = np.linalg.svd(c, compute_uv=False)  # (..., 3)
-    r = np.sum(s / math.sqrt(max(a.shape[-2], 1)) > tol, axis=-1)
+    return rank_of_spread(np.linalg.svd(c, compute_uv=False), a.shape[-2], tol)
+
+
+def rank_of_spread(s, M: int, tol: float = MIN_ANCHOR_DISTANCE) -> np.ndarray | int:
+    """:func:`anchor_rank` from the singular values s (..., 3) of M anchors' coordinates
+    about their mean."""
+    r = np.sum(np.asarray(s) / math.sqrt(max(M, 1)) > tol, axis=-1)
     return int(r) if np.ndim(r) == 0 else r
 
 

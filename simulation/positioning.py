@@ -90,17 +90,28 @@ def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _linear_solution(a: np.ndarray, ranges: np.ndarray):
+def _spread(a: np.ndarray):
+    """The SVD (U, s, Vᵀ) of A = 2 (a − ā), the matrix of the squared-range differences,
+    for layouts a (L, M, 3): one decomposition serves the linear solution and the
+    layouts' affine rank."""
+    A = 2.0 * (a - a.mean(axis=1, keepdims=True))  # (L, M, 3)
+    return np.linalg.svd(A, full_matrices=False)
+
+
+def _linear_solution(a: np.ndarray, ranges: np.ndarray, svd=None):
     """Linear LS solutions (B, 3) of the squared-range differences for ranges (B, M) of
     the layouts a (L, M, 3), B/L consecutive rows per layout, and whether each row's
-    anchors are not coplanar (B,)."""
+    anchors are not coplanar (B,). ``svd``: :func:`_spread` of a, if already known."""
     L, M, _ = a.shape
-    A = 2.0 * (a - a.mean(axis=1, keepdims=True))  # (L, M, 3)
-    sv = np.linalg.svd(A, compute_uv=False)  # (L, 3)
+    u, sv, vt = _spread(a) if svd is None else svd
+    # the pseudo-inverse by numpy.linalg.pinv's rule (rcond 1e-15), from the same SVD
+    large = sv > 1e-15 * sv.max(axis=1, keepdims=True)
+    inv = np.divide(1.0, sv, where=large, out=np.zeros_like(sv))
+    pinv = np.swapaxes(vt, 1, 2) @ (inv[..., None] * np.swapaxes(u, 1, 2))  # (L, 3, M)
     a2 = np.sum(a * a, axis=2)  # (L, M)
     r2 = ranges.reshape(L, -1, M) ** 2
     b = (a2 - a2.mean(axis=1, keepdims=True))[:, None] - (r2 - r2.mean(axis=2, keepdims=True))
-    lin = b @ np.swapaxes(np.linalg.pinv(A), 1, 2)  # (L, B/L, 3)
+    lin = b @ np.swapaxes(pinv, 1, 2)  # (L, B/L, 3)
     ok = sv[:, -1] > 1e-9 * np.maximum(sv[:, 0], 1e-300)
     return lin.reshape(-1, 3), np.repeat(ok, r2.shape[1])
 
@@ -159,14 +170,15 @@ def locate(
     R = rho.reshape(-1, M)
     layouts = a.reshape(-1, M, 3)
     owner, lo, hi = _rows(layouts, len(R), region)
-    x = _start(layouts, R, owner, lo, hi, x0, lead)
+    svd = _spread(layouts)
+    x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
     if bounded:
         x = np.clip(x, lo, hi)
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
         layouts, owner, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
     )
-    rank = np.atleast_1d(checks.anchor_rank(layouts))
+    rank = np.atleast_1d(checks.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
     # collinear: rotation about the anchor line leaves the ranges unchanged
     status[(rank < 2)[owner]] = -1
     converged = status > 0
@@ -233,9 +245,9 @@ def _rows(a: np.ndarray, B: int, region):
     return owner, lo, hi
 
 
-def _start(a, R, owner, lo, hi, x0, lead) -> np.ndarray:
+def _start(a, R, owner, lo, hi, x0, lead, svd) -> np.ndarray:
     """(B, 3) starting points: ``x0``, else the linear solution when inside the region,
-    else the region's centre."""
+    else the region's centre (``svd``: :func:`_spread` of the layouts a)."""
     B = len(R)
     if x0 is not None:
         x0 = checks.reals("x0", x0)
@@ -249,7 +261,7 @@ def _start(a, R, owner, lo, hi, x0, lead) -> np.ndarray:
     x = (lo + hi) / 2
     if B == 0:
         return x
-    lin, ok = _linear_solution(a, R)
+    lin, ok = _linear_solution(a, R, svd)
     inside = ok & np.all((lin >= lo) & (lin <= hi), axis=1)
     x[inside] = lin[inside]
     return x
