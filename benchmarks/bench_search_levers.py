@@ -14,9 +14,9 @@ One JSON line per run: the validated σ / mean / P95 at the 270 nodes (R = 100, 
 own validation noise), σ at the held-out grid, the random points and under mounting
 error, the chosen finalist, the finalists' fresh-draw costs (m²) and the seconds of every
 phase (the table's seconds apart: it is built once per seed). ``--summary JSONL`` prints
-the table of BENCHMARKS.md ("Levers on the spread") from such files (several may be
+the two tables of BENCHMARKS.md ("Levers on the spread") from such files (several may be
 given; the seeded runs of ``bench_pso.py``'s ``bench_plan.jsonl`` count as the default
-settings).
+settings): the runs per setting, and how much σ varies from seed to seed.
 
 Run: python benchmarks/bench_search_levers.py [--search '{"evaluations": 9000}']
      [--anchors 4 6 8 10] [--seeds 5] [--table-seed T] [--workers 2]
@@ -100,6 +100,47 @@ def summary(paths: list[str]) -> None:
             f"| `{search}` | {table} | {M} | {', '.join(f'{x:.3f}' for x in s)} "
             f"| {statistics.median(s):.3f} | {max(s):.3f} | {spread(s):.1%} "
             f"| {below} of {len(rs)} | {where} |"
+        )
+    print()
+    odds(groups)
+
+
+def _sd(runs: list[list[float]]) -> float:
+    """The standard deviation of σ over seeds as a fraction of the median, pooled over
+    groups of runs (each about its own mean)."""
+    dev = np.concatenate([(np.array(s) - np.mean(s)) / np.median(s) for s in runs])
+    return float(np.sqrt(np.sum(dev**2) / (len(dev) - len(runs))))
+
+
+def odds(groups: dict[tuple, list[dict]], target: float = 0.05, seeds: int = 5) -> None:
+    """Per M, the run-to-run standard deviation of σ (as a fraction of the median) of the
+    default settings and pooled over every setting searched on its own tables, and the
+    chance that ``seeds`` seeds spread by at most ``target`` if σ were normal with it: the
+    range of n normal draws over their standard deviation follows the studentized range
+    with infinite degrees of freedom."""
+    from scipy.stats import studentized_range
+
+    def chance(sd: float) -> float:
+        return float(studentized_range.cdf(target / sd, seeds, np.inf))
+
+    print(
+        f"| M | sd of σ / median: default (5 runs) | pooled: settings, runs, sd "
+        f"| chance {seeds} seeds spread ≤ {target:.0%}: default / pooled sd "
+        f"| sd for a 90 % chance |"
+    )
+    print("|---|---|---|---|---|")
+    need = target / studentized_range.ppf(0.9, seeds, np.inf)
+    for M in sorted({M for _, _, M in groups}):
+        own = {k: [r["std"] for r in rs] for k, rs in groups.items() if k[2] == M and k[1] < 0}
+        runs = [s for s in own.values() if len(s) > 1]
+        if not runs:
+            continue
+        pooled = _sd(runs)
+        base = _sd([own[("{}", -1, M)]]) if len(own.get(("{}", -1, M), ())) > 1 else None
+        b, cb = ("—", "—") if base is None else (f"{base:.2%}", f"{chance(base):.2f}")
+        print(
+            f"| {M} | {b} | {len(runs)}, {sum(map(len, runs))}, {pooled:.2%} "
+            f"| {cb} / {chance(pooled):.2f} | {need:.2%} |"
         )
 
 
