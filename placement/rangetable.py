@@ -271,7 +271,8 @@ def _fixes(table: RangeTable, layouts):
 
 def _errors(table: RangeTable, fix) -> np.ndarray:
     """(L, D·P) Euclidean errors (m) of the fixes of L layouts at the table's nodes."""
-    return np.linalg.norm(fix.x - table.nodes, axis=-1).reshape(len(fix.x), -1)
+    e = np.linalg.norm(fix.x - table.nodes, axis=-1)  # (L, D, P)
+    return e.reshape(len(e), math.prod(e.shape[1:]))  # explicit: L may be 0
 
 
 def table_errors(table: RangeTable, layouts) -> np.ndarray:
@@ -287,7 +288,7 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     fix = _fixes(table, layouts)
     e = _errors(table, fix)
     # collinear or coincident anchors leave the position undetermined: never a solution
-    fixed = ~np.any(fix.status.reshape(len(e), -1) == -1, axis=1)
+    fixed = ~np.any(fix.status.reshape(e.shape) == -1, axis=1)
     stat = STATISTICS[statistic]
     return np.array([stat(row) if ok else math.inf for row, ok in zip(e, fixed, strict=True)])
 

@@ -236,11 +236,11 @@ def _rows(a: np.ndarray, B: int, region):
     """The layout (B,) of each row of ranges for layouts a (L, M, 3), and the bounds of
     the region (B, 3) each row lies in (each layout's bounding box when ``region`` is
     None)."""
-    owner = np.repeat(np.arange(len(a)), B // len(a))
+    owner = np.repeat(np.arange(len(a)), B // max(len(a), 1))  # no layouts: no rows
     if region is None:
         lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
     else:
-        lo, hi = _region(a[0], region)
+        lo, hi = _region(a, region)  # a given region does not depend on the anchors
         lo, hi = np.broadcast_to(lo, (B, 3)), np.broadcast_to(hi, (B, 3))
     return owner, lo, hi
 

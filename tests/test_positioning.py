@@ -117,6 +117,10 @@ def test_several_layouts_at_once_match_one_by_one():
             np.testing.assert_allclose(both[i], locate(anchors[i], ranges[i], **kw), atol=1e-6)
     with pytest.raises(ValueError, match="layouts"):
         locate(anchors, ranges[:1])
+    # no layouts at all: empty positions of the matching shape, with or without a region
+    for kw in ({}, {"region": (np.zeros(3), np.array(room.size))}):
+        fix = locate(anchors[:0], ranges[:0], full_output=True, **kw)
+        assert fix.x.shape == (0, 3, len(nodes), 3) and fix.status.shape == (0, 3, len(nodes))
 
 
 def test_each_node_is_solved_as_if_alone():

@@ -95,6 +95,10 @@ def test_layouts_scored_in_one_batch_score_as_one_by_one():
     rng = np.random.default_rng(2)
     layouts = np.stack([rng.choice(12, 4, replace=False) for _ in range(6)])
     np.testing.assert_array_equal(table_costs(t, layouts), [table_cost(t, S) for S in layouts])
+    # no layouts: nothing to score, not an error
+    none = np.zeros((0, 4), dtype=int)
+    assert table_costs(t, none).shape == (0,)
+    assert table_errors(t, none).shape == (0, t.draws * len(NODES))
 
 
 def test_descent_returns_a_local_optimum_of_its_neighbourhood():
