@@ -25,7 +25,6 @@ import numpy as np
 
 __all__ = [
     "anchor_rank",
-    "rank_of_spread",
     "check_size",
     "choice",
     "count",
@@ -42,6 +41,7 @@ __all__ = [
     "memory_limit",
     "output_path",
     "points",
+    "rank_of_spread",
     "real",
     "reals",
     "rng",

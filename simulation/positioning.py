@@ -90,7 +90,7 @@ def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def _spread(a: np.ndarray):
+def _centred_svd(a: np.ndarray):
     """The SVD (U, s, Vᵀ) of A = 2 (a − ā), the matrix of the squared-range differences,
     for layouts a (L, M, 3): one decomposition serves the linear solution and the
     layouts' affine rank."""
@@ -101,9 +101,9 @@ def _spread(a: np.ndarray):
 def _linear_solution(a: np.ndarray, ranges: np.ndarray, svd=None):
     """Linear LS solutions (B, 3) of the squared-range differences for ranges (B, M) of
     the layouts a (L, M, 3), B/L consecutive rows per layout, and whether each row's
-    anchors are not coplanar (B,). ``svd``: :func:`_spread` of a, if already known."""
+    anchors are not coplanar (B,). ``svd``: :func:`_centred_svd` of a, if already known."""
     L, M, _ = a.shape
-    u, sv, vt = _spread(a) if svd is None else svd
+    u, sv, vt = _centred_svd(a) if svd is None else svd
     # the pseudo-inverse by numpy.linalg.pinv's rule (rcond 1e-15), from the same SVD
     large = sv > 1e-15 * sv.max(axis=1, keepdims=True)
     inv = np.divide(1.0, sv, where=large, out=np.zeros_like(sv))
@@ -170,7 +170,7 @@ def locate(
     R = rho.reshape(-1, M)
     layouts = a.reshape(-1, M, 3)
     owner, lo, hi = _rows(layouts, len(R), region)
-    svd = _spread(layouts)
+    svd = _centred_svd(layouts)
     x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
     if bounded:
         x = np.clip(x, lo, hi)
@@ -247,7 +247,7 @@ def _rows(a: np.ndarray, B: int, region):
 
 def _start(a, R, owner, lo, hi, x0, lead, svd) -> np.ndarray:
     """(B, 3) starting points: ``x0``, else the linear solution when inside the region,
-    else the region's centre (``svd``: :func:`_spread` of the layouts a)."""
+    else the region's centre (``svd``: :func:`_centred_svd` of the layouts a)."""
     B = len(R)
     if x0 is not None:
         x0 = checks.reals("x0", x0)
