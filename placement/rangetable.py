@@ -39,7 +39,7 @@ from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
 from simulation import checks
 from simulation.room import Room
-from simulation.statistics import STATISTICS
+from simulation.statistics import row_statistics
 
 
 @dataclass(frozen=True)
@@ -289,8 +289,7 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     e = _errors(table, fix)
     # collinear or coincident anchors leave the position undetermined: never a solution
     fixed = ~np.any(fix.status.reshape(e.shape) == -1, axis=1)
-    stat = STATISTICS[statistic]
-    return np.array([stat(row) if ok else math.inf for row, ok in zip(e, fixed, strict=True)])
+    return np.where(fixed, row_statistics(statistic, e), math.inf)
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

@@ -44,6 +44,7 @@ __all__ = [
     "node_rmse",
     "node_std",
     "range_std",
+    "row_statistics",
 ]
 
 #: the percentile reported as "p95" (numpy's default linear interpolation)
@@ -101,24 +102,45 @@ def error_stats(errors) -> dict[str, float | int]:
     return out
 
 
-def _strict(fn: Callable[[np.ndarray], float]) -> Callable[[np.ndarray], float]:
+#: the cost statistics as reductions over an axis (None: all errors), lower is better
+_REDUCTIONS: dict[str, Callable[..., np.ndarray]] = {
+    "variance": lambda e, axis=None: np.var(e, axis=axis),
+    "mean": lambda e, axis=None: np.mean(e, axis=axis),
+    "p95": lambda e, axis=None: np.percentile(e, PERCENTILE, axis=axis),
+    "rms": lambda e, axis=None: np.sqrt(np.mean(e * e, axis=axis)),
+}
+
+
+def _strict(name: str) -> Callable[[np.ndarray], float]:
+    reduce = _REDUCTIONS[name]
+
     def stat(errors) -> float:
         e = np.asarray(errors, dtype=float)
-        return fn(e) if np.all(np.isfinite(e)) else math.inf
+        return float(reduce(e)) if np.all(np.isfinite(e)) else math.inf
 
-    stat.__doc__ = fn.__doc__
     return stat
 
 
 #: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost, lower
 #: is better; each is +inf if some error is not finite. "variance" is the paper's cost
 #: (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
-STATISTICS: dict[str, Callable[[np.ndarray], float]] = {
-    "variance": _strict(lambda e: float(np.var(e))),
-    "mean": _strict(lambda e: float(np.mean(e))),
-    "p95": _strict(lambda e: float(np.percentile(e, PERCENTILE))),
-    "rms": _strict(lambda e: float(np.sqrt(np.mean(e * e)))),
-}
+STATISTICS: dict[str, Callable[[np.ndarray], float]] = {k: _strict(k) for k in _REDUCTIONS}
+
+
+def row_statistics(name: str, errors) -> np.ndarray:
+    """(L,) the cost statistic ``name`` of :data:`STATISTICS` of each row of errors (L, n)
+    at once: row l's value equals ``STATISTICS[name](errors[l])`` (+inf for a row with a
+    non-finite error)."""
+    checks.choice("statistic", name, tuple(_REDUCTIONS))
+    e = np.asarray(errors, dtype=float)
+    if e.ndim != 2:
+        raise ValueError(f"errors: expected shape (L, n), got {e.shape}")
+    out = np.full(len(e), math.inf)
+    ok = np.all(np.isfinite(e), axis=1)
+    if np.any(ok):
+        out[ok] = _REDUCTIONS[name](e[ok], axis=1)
+    return out
+
 
 #: the unit of a cost by its name: the statistics above and the mean PEB ("peb", m)
 COST_UNITS = {"variance": "m²", "mean": "m", "p95": "m", "rms": "m", "peb": "m"}

@@ -4,7 +4,7 @@ import pytest
 import analysis
 from analysis.noise import PhysicalRangeNoise, direct_amplitude
 from simulation import Room
-from simulation.statistics import STATISTICS
+from simulation.statistics import STATISTICS, row_statistics
 
 
 def test_physical_sigma_matches_explicit_sum_and_snr_reference():
@@ -74,6 +74,21 @@ def test_cost_statistics_are_inf_for_a_failed_fix():
     bad = e.copy()
     bad[0, 0] = np.nan
     assert all(STATISTICS[k](bad) == np.inf for k in STATISTICS)
+
+
+def test_row_statistics_equal_the_statistic_of_each_row():
+    rng = np.random.default_rng(3)
+    e = np.abs(rng.standard_normal((7, 810))) * rng.uniform(0.1, 2.0, (7, 1))
+    e[2, 5] = np.nan  # a failed fix: that row only is +inf
+    e[4, 0] = np.inf
+    for name in STATISTICS:
+        rows = row_statistics(name, e)
+        assert rows.shape == (7,) and np.isinf(rows[[2, 4]]).all()
+        # equal, not approximately: the search's choices must not depend on the batching
+        np.testing.assert_array_equal(rows, [STATISTICS[name](r) for r in e])
+    assert row_statistics("variance", e[:0]).shape == (0,)
+    with pytest.raises(ValueError, match="statistic"):
+        row_statistics("median", e)
 
 
 def test_per_node_statistics_use_the_finite_errors():
