@@ -749,7 +749,7 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
     elif seeds is not None:
         grid = room.grid() if run["nodes"] is None else run["nodes"]
         arr = checks.reals("seeds", seeds)
-        if arr.size % (3 * M) or arr.shape[-1] != 3:
+        if arr.ndim not in (2, 3) or arr.shape[-2:] != (M, 3):
             raise ValueError(f"seeds: expected layouts of shape (S, {M}, 3), got {arr.shape}")
         for i, a in enumerate(arr.reshape(-1, M, 3)):
             out.append(SeedLayout(f"user-{i + 1}", a, float(np.mean(peb(a, grid, run["sigma"])))))

@@ -742,7 +742,7 @@ def _check_initial(initial, M: int, K: int) -> np.ndarray | None:
     if initial is None:
         return None
     initial = checks.reals("initial", initial)
-    if initial.size % (3 * M) or initial.shape[-1] != 3 or initial.ndim not in (2, 3):
+    if initial.ndim not in (2, 3) or initial.shape[-2:] != (M, 3):
         raise ValueError(
             f"initial: expected seed layouts of shape (S, {M}, 3), got {initial.shape}"
         )

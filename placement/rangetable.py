@@ -217,16 +217,27 @@ def range_table(
     """
     cand = room.check_anchors(candidates, min_anchors=1)
     seed = checks.entropy("rng", rng)
-    nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
-    if nodes.ndim == 2:
-        nodes = node_draws(room, nodes, int(draws), int(exact_draws), seed)
+    nodes = room.grid() if nodes is None else checks.reals("nodes", nodes)
+    if nodes.ndim == 3 and len(nodes):  # explicit node sets: they set the draws
+        nodes = np.stack([room.check_nodes(n) for n in nodes])
+        draws = len(nodes)
+    elif nodes.ndim == 2:
+        nodes = room.check_nodes(nodes)
+    else:
+        raise ValueError(f"nodes: expected (P, 3) or (D, P, 3) with D >= 1, got {nodes.shape}")
+    draws = checks.count("draws", draws, low=1, high=1000)
     spec = {
-        "exact_draws": int(exact_draws),
-        "mount_tolerance": float(mount_tolerance),
+        "exact_draws": checks.count("exact_draws", exact_draws, low=0, high=draws),
+        "mount_tolerance": checks.real(
+            "mount_tolerance", mount_tolerance, low=0.0, high=1.0, unit="m"
+        ),
         "seed": seed,
-        "precision": precision,
+        "precision": checks.choice("precision", precision, ("float64", "float32")),
     }
-    ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, int(chunk), progress)
+    chunk = checks.count("chunk", chunk, low=1)
+    if nodes.ndim == 2:
+        nodes = node_draws(room, nodes, draws, spec["exact_draws"], seed)
+    ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
     region = (np.zeros(3), np.asarray(room.size, dtype=float))
     return RangeTable(cand, nodes, ranges, dist, region, **spec)
 
@@ -242,6 +253,7 @@ def extend_table(
     """The table with columns for more candidates (n, 3) appended (indices N … N + n − 1),
     simulated on the same draws: equal to building the bigger table at once."""
     new = room.check_anchors(candidates, min_anchors=1)
+    chunk = checks.count("chunk", chunk, low=1)
     spec = {
         "exact_draws": table.exact_draws,
         "mount_tolerance": table.mount_tolerance,
@@ -259,12 +271,28 @@ def extend_table(
     )
 
 
+def _layout_indices(table: RangeTable, layouts) -> np.ndarray:
+    """layouts as (L, M) integer indices of the table's candidates, or ValueError."""
+    S = np.asarray(layouts)
+    N = len(table.candidates)
+    if S.ndim != 2 or (S.size and not np.issubdtype(S.dtype, np.integer)):
+        raise ValueError(
+            f"layouts: expected (L, M) integer indices of the table's candidates, got "
+            f"{checks.describe(layouts)}"
+        )
+    if S.size and (S.min() < 0 or S.max() >= N):
+        raise ValueError(
+            f"layouts: candidate indices must be in [0, {N - 1}], got {S.min()} … {S.max()}"
+        )
+    return S.astype(int, copy=False)
+
+
 def _fixes(table: RangeTable, layouts):
     """The :class:`~simulation.positioning.PositionFix` of layouts (L, M) of candidates
     over every draw and node of the table, positioned in one batch."""
     from simulation.positioning import locate
 
-    S = np.asarray(layouts, dtype=int)
+    S = _layout_indices(table, layouts)
     ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
     return locate(table.candidates[S], ranges, region=table.region, full_output=True)
 

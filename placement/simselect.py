@@ -143,10 +143,15 @@ class Chain:
         """Take steps while fewer than ``until`` layouts were scored; never score more
         than ``budget`` in all. Returns self."""
         M = len(self.S)
-        while self.nfev < min(until, budget):
+        stuck = 0  # anchors in a row whose neighbours are all in the layout
+        while self.nfev < min(until, budget) and stuck < M:
             a = self.order[self.step % M]
             self.step += 1
             pool = [j for j in nbr[self.S[a]] if j not in self.S]
+            if not pool:  # no swap for this anchor (tiny tables, tiny neighbourhoods)
+                stuck += 1
+                continue
+            stuck = 0
             size = min(batch, len(pool), budget - self.nfev)
             js = self.rng.choice(pool, size=size, replace=False)
             swaps = np.stack([np.where(np.arange(M) == a, j, self.S) for j in js])
@@ -403,6 +408,7 @@ def simulated_select(
     opt = options or SearchOptions()
     M = checks.count("M", M, low=4, high=1000)
     seed = checks.entropy("rng", rng)
+    workers = checks.count("workers", workers, low=1, high=1024)
     t0 = time.perf_counter()
     if table is None:
         table = search_table(room, opt, nodes, seed, executor)
@@ -441,9 +447,11 @@ def refine_on_table(
     scored."""
     opt = options or SearchOptions()
     seed = checks.entropy("rng", rng)
-    current = [np.asarray(a, dtype=float) for a in layouts]
+    current = [room.check_anchors(a) for a in layouts]
     out = [(a, math.inf, False) for a in current]
     nfev = 0
+    if not current:
+        return out, table, nfev
     for level, spacing in enumerate(opt.fine_spacings):
         points = np.concatenate(
             [np.concatenate([a, fine_points(room, a, spacing, opt.fine_steps)]) for a in current]

@@ -139,6 +139,7 @@ def validate_layout(
     """
     opt = options or ValidationOptions()
     seed = checks.entropy("rng", rng)
+    mount_tolerance = checks.real("mount_tolerance", mount_tolerance, low=0.0, high=1.0, unit="m")
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     out: dict[str, Any] = {}

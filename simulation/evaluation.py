@@ -95,9 +95,12 @@ class RangingScene:
 
     def ranges_batch(self, rngs, noise: bool = True) -> np.ndarray:
         """(len(rngs), P, M) ranges, realization r drawn from ``rngs[r]``."""
+        rngs = list(rngs)
         if not noise:
             r0 = self._to_ranges(self.windows)
             return np.broadcast_to(r0, (len(rngs), *r0.shape)).copy()
+        if not rngs:
+            return np.empty((0, *self.shape))
         return self._to_ranges(np.stack([self.noisy_windows(g) for g in rngs]))
 
 

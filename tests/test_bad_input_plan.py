@@ -134,3 +134,83 @@ def test_room_none_is_the_default_room_and_anything_else_is_refused():
     np.testing.assert_array_equal(default.anchors, explicit.anchors)
     refused("room", lambda: seed_then_pso("techtile", 4, **TINY))
     refused("room", lambda: placement.sweep(ROOM.to_dict(), anchors=[4], **TINY))
+
+
+# -- the range-table search and its neighbours: empty and degenerate input -----------------
+CORNERS = ROOM.corners_layout()
+FEW = ROOM.grid()[::54]  # 5 nodes
+
+
+def _tiny_table(n=4, **kw):
+    from placement.rangetable import range_table
+    from placement.surfaces import candidate_grid
+
+    return range_table(ROOM, candidate_grid(ROOM, 2.0)[:n], FEW, **kw)
+
+
+@pytest.mark.parametrize(
+    ("name", "kw"),
+    [
+        ("draws", {"draws": 0}),
+        ("draws", {"draws": -2}),
+        ("draws", {"draws": 1.7}),
+        ("exact_draws", {"draws": 2, "exact_draws": -1}),
+        ("exact_draws", {"draws": 2, "exact_draws": 5}),
+        ("mount_tolerance", {"draws": 2, "mount_tolerance": -1.0}),
+        ("mount_tolerance", {"draws": 2, "mount_tolerance": 5.0}),
+        ("mount_tolerance", {"draws": 2, "exact_draws": 1, "mount_tolerance": np.nan}),
+        ("chunk", {"chunk": 0}),
+        ("nodes", {"nodes": np.zeros((0, 5, 3))}),
+        ("precision", {"precision": "float16"}),
+    ],
+)
+def test_range_table_arguments_are_checked(name, kw):
+    from placement.rangetable import range_table
+
+    refused(name, lambda: range_table(ROOM, CORNERS, kw.pop("nodes", FEW), **kw), within=2)
+
+
+def test_table_layouts_must_be_candidate_indices():
+    from placement.rangetable import table_costs
+
+    t = _tiny_table(6)
+    for bad in ([[0, 1, 2, 6]], [[-1, 1, 2, 3]], [[0.5, 1, 2, 3]], [0, 1, 2, 3]):
+        refused("layouts", lambda bad=bad: table_costs(t, bad))
+
+
+def test_a_table_of_exactly_M_candidates_is_searched_not_a_crash():
+    from placement.simselect import SearchOptions, refine_on_table, simulated_select
+
+    t = _tiny_table(4)  # every neighbour of an anchor is in the layout: no swap exists
+    opt = SearchOptions(chains=2, evaluations=40, random_starts=2, fine_spacings=())
+    res = simulated_select(ROOM, 4, options=opt, table=t, rng=0)
+    assert sorted(res.indices) == [0, 1, 2, 3] and np.isfinite(res.fun)
+    # no layouts to refine: nothing to do, with or without fine spacings
+    assert refine_on_table(ROOM, t, [], options=SearchOptions(), rng=0) == ([], t, 0)
+    refused("anchors", lambda: refine_on_table(ROOM, t, [np.zeros((0, 3))]))
+    refused("workers", lambda: simulated_select(ROOM, 4, options=opt, table=t, workers=0))
+
+
+def test_seed_layouts_must_have_M_anchors():
+    six = np.stack([ROOM.corners_layout()[:3]] * 2).reshape(1, 6, 3)
+    refused("seeds", lambda: seed_then_pso(ROOM, 4, **{**TINY, "seeds": np.concatenate([six] * 2)}))
+    refused("initial", lambda: placement.pso(placement.PEBCost(ROOM), ROOM, 4, initial=six))
+    one = seed_then_pso(ROOM, 4, **{**TINY, "seeds": CORNERS})  # one (M, 3) layout
+    assert [s.name for s in one.seeds] == ["user-1"]
+
+
+@pytest.mark.parametrize("tolerance", [np.nan, -0.01, 5.0])
+def test_validation_mount_tolerance_is_checked(tolerance):
+    from placement.validation import validate_layout
+
+    refused(
+        "mount_tolerance", lambda: validate_layout(ROOM, CORNERS, rng=0, mount_tolerance=tolerance)
+    )
+
+
+def test_no_realizations_are_an_empty_batch():
+    from simulation.evaluation import RangingScene
+
+    scene = RangingScene(ROOM, CORNERS, FEW)
+    assert scene.ranges_batch([]).shape == (0, len(FEW), 4)
+    assert scene.ranges_batch([], noise=False).shape == (0, len(FEW), 4)
