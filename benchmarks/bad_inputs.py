@@ -779,6 +779,63 @@ def _second_sweep_cases() -> None:
             api(category, label, name, fn)
 
 
+def _empty_input_cases() -> None:
+    """Empty and degenerate input to the range-table search and its neighbours (a third
+    sweep): refused with the argument's name, or an empty result of the matching shape."""
+    from placement.rangetable import range_table, table_costs
+    from placement.simselect import SearchOptions, refine_on_table, simulated_select
+    from placement.validation import validate_layout
+    from simulation.evaluation import RangingScene
+
+    cand = placement.candidate_grid(ROOM, 2.0)[:6]
+    few = ROOM.grid()[::54]
+
+    def table(n=6, **kw):
+        return range_table(ROOM, cand[:n], few, **kw)
+
+    tiny = SearchOptions(chains=2, evaluations=40, random_starts=2, fine_spacings=())
+    refused = [
+        *[(f"range_table({k}={v!r})", k, lambda k=k, v=v, d=d: table(**{k: v, **d}))
+          for k, v, d in [("draws", 0, {}), ("draws", -2, {}), ("draws", 1.7, {}),
+                          ("exact_draws", -1, {"draws": 2}), ("exact_draws", 5, {"draws": 2}),
+                          ("mount_tolerance", -1.0, {"draws": 2}),
+                          ("mount_tolerance", math.nan, {"draws": 2}), ("chunk", 0, {})]],
+        ("range_table(nodes (0, P, 3))", "nodes",
+         lambda: range_table(ROOM, cand, np.zeros((0, 5, 3)))),
+        ("table_costs(index 99)", "layouts", lambda: table_costs(table(), [[0, 1, 2, 99]])),
+        ("table_costs(index -1)", "layouts", lambda: table_costs(table(), [[-1, 1, 2, 3]])),
+        ("table_costs(index 0.5)", "layouts", lambda: table_costs(table(), [[0.5, 1, 2, 3]])),
+        ("refine_on_table(layout (0, 3))", "anchors",
+         lambda: refine_on_table(ROOM, table(), [np.zeros((0, 3))])),
+        ("simulated_select(workers 0)", "workers",
+         lambda: simulated_select(ROOM, 4, options=tiny, table=table(), workers=0)),
+        ("seed_then_pso(seeds of 6 anchors, M 4)", "seeds",
+         lambda: seed_then_pso(ROOM, 4, **{**PLAN_KW, "seeds": np.zeros((2, 6, 3)) + 1})),
+        ("pso(initial of 6 anchors, M 4)", "initial",
+         lambda: pso(peb_cost, ROOM, 4, initial=np.zeros((1, 6, 3)) + 1)),
+        *[(f"validate_layout(mount_tolerance {v!r})", "mount_tolerance",
+           lambda v=v: validate_layout(ROOM, A, rng=0, mount_tolerance=v))
+          for v in (math.nan, -0.01, 5.0)],
+    ]  # fmt: skip
+    for label, name, fn in refused:
+        api("empty", label, name, fn)
+    handled = [
+        ("simulated_select(table of M candidates)", "table",
+         lambda: sorted(simulated_select(ROOM, 4, options=tiny, table=table(4)).indices)
+         == [0, 1, 2, 3]),
+        ("refine_on_table(no layouts)", "layouts",
+         lambda: refine_on_table(ROOM, table(), [])[0] == []),
+        ("table_costs(no layouts)", "layouts",
+         lambda: table_costs(table(), np.zeros((0, 4), int)).shape == (0,)),
+        ("locate(no layouts)", "anchors",
+         lambda: locate(np.zeros((0, 4, 3)), np.zeros((0, 5, 4))).shape == (0, 5, 3)),
+        ("ranges_batch([])", "rngs",
+         lambda: RangingScene(ROOM, A, few).ranges_batch([]).shape == (0, len(few), 4)),
+    ]  # fmt: skip
+    for label, name, fn in handled:
+        api("empty", label, name, fn, check=True)
+
+
 def build_api_cases(tmp: Path) -> None:
     """Every API case, by kind of bad input."""
     _simulation_count_cases()
@@ -794,6 +851,7 @@ def build_api_cases(tmp: Path) -> None:
     _toml_library_cases(tmp)
     _wrong_type_cases(tmp)
     _second_sweep_cases()
+    _empty_input_cases()
 
 
 def build_neighbour_cases() -> None:
