@@ -42,7 +42,7 @@ from placement.rangetable import node_draws
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, to_jsonable, write_json_atomic
 from placement.simselect import SearchOptions
-from placement.surfaces import random_layout
+from placement.surfaces import project, random_layout
 from placement.validation import ValidationOptions, validate_layout
 from placement.workers import executor_workers, run_calls
 from simulation import checks
@@ -553,7 +553,7 @@ def seed_then_pso(
         with constant ``sigma``); or a callable ``f(anchors)`` / ``f(anchors, rng)``.
     seeds : "auto" (the search's optima for a simulated cost; relaxations and their
         refinements otherwise), None (an unseeded swarm: random particles, the paper's
-        setting), or seed layouts (S, M, 3).
+        setting), or seed layouts (S, M, 3), projected onto the mounting surfaces.
     search : the search's settings (:class:`placement.simselect.SearchOptions` or a dict
         of its fields); its ``draws`` and ``exact_draws`` also set the swarm's draws.
     options, particles, iterations : the swarm's settings (default :data:`LOCAL_SWARM`
@@ -751,7 +751,9 @@ def _seeds(room: Room, run: dict, clock: _Clock) -> tuple[list[SeedLayout], dict
         arr = checks.reals("seeds", seeds)
         if arr.ndim not in (2, 3) or arr.shape[-2:] != (M, 3):
             raise ValueError(f"seeds: expected layouts of shape (S, {M}, 3), got {arr.shape}")
-        for i, a in enumerate(arr.reshape(-1, M, 3)):
+        # on the mounting surfaces, as the swarm starts from them: the reported seed and
+        # its PEB are the layout that is used
+        for i, a in enumerate(project(room, arr.reshape(-1, M, 3))):
             out.append(SeedLayout(f"user-{i + 1}", a, float(np.mean(peb(a, grid, run["sigma"])))))
     return out[: run["swarm"].particles], summary
 

@@ -214,3 +214,14 @@ def test_no_realizations_are_an_empty_batch():
     scene = RangingScene(ROOM, CORNERS, FEW)
     assert scene.ranges_batch([]).shape == (0, len(FEW), 4)
     assert scene.ranges_batch([], noise=False).shape == (0, len(FEW), 4)
+
+
+def test_user_seeds_are_reported_as_the_swarm_uses_them():
+    off = CORNERS + [0.0, 0.0, 1.5]  # above the ceiling: the swarm projects them
+    res = seed_then_pso(ROOM, 4, **{**TINY, "seeds": off[None]})
+    seed = res.seeds[0]
+    assert placement.on_surfaces(ROOM, seed.anchors).all()
+    from analysis import peb
+
+    assert seed.mean_peb == pytest.approx(np.mean(peb(seed.anchors, ROOM.grid(), 0.04)))
+    assert seed.mean_peb < 10  # the PEB of the layout in the room, not of the one above it
