@@ -38,6 +38,7 @@ import numpy as np
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
 from simulation import checks
+from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
 
@@ -232,7 +233,7 @@ def range_table(
             "mount_tolerance", mount_tolerance, low=0.0, high=1.0, unit="m"
         ),
         "seed": seed,
-        "precision": checks.choice("precision", precision, ("float64", "float32")),
+        "precision": checks.choice("precision", precision, PRECISIONS),
     }
     chunk = checks.count("chunk", chunk, low=1)
     if nodes.ndim == 2:

@@ -28,14 +28,13 @@ from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
-from simulation.receiver import DEFAULT_PRECISION, Receiver, dsp_for, signal_chain
+from simulation.receiver import DEFAULT_PRECISION, PRECISIONS, Receiver, dsp_for, signal_chain
 from simulation.room import Room, as_room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
 NOISE_BUDGET_BYTES = 64 * 2**20
 #: bytes held per (realization, node, anchor) by evaluate_layout and locate, an estimate
 BYTES_PER_RANGE = 8 * 16
-PRECISIONS = ("float64", "float32")
 
 
 class RangingScene:

@@ -116,27 +116,27 @@ def _strict(name: str) -> Callable[[np.ndarray], float]:
 
     def stat(errors) -> float:
         e = np.asarray(errors, dtype=float)
-        return float(reduce(e)) if np.all(np.isfinite(e)) else math.inf
+        return float(reduce(e)) if e.size and np.all(np.isfinite(e)) else math.inf
 
     return stat
 
 
 #: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost, lower
-#: is better; each is +inf if some error is not finite. "variance" is the paper's cost
-#: (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
+#: is better; each is +inf if some error is not finite or there is none. "variance" is
+#: the paper's cost (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
 STATISTICS: dict[str, Callable[[np.ndarray], float]] = {k: _strict(k) for k in _REDUCTIONS}
 
 
 def row_statistics(name: str, errors) -> np.ndarray:
     """(L,) the cost statistic ``name`` of :data:`STATISTICS` of each row of errors (L, n)
     at once: row l's value equals ``STATISTICS[name](errors[l])`` (+inf for a row with a
-    non-finite error)."""
+    non-finite error, or for rows without errors)."""
     checks.choice("statistic", name, tuple(_REDUCTIONS))
     e = np.asarray(errors, dtype=float)
     if e.ndim != 2:
         raise ValueError(f"errors: expected shape (L, n), got {e.shape}")
     out = np.full(len(e), math.inf)
-    ok = np.all(np.isfinite(e), axis=1)
+    ok = np.all(np.isfinite(e), axis=1) & (e.shape[1] > 0)
     if np.any(ok):
         out[ok] = _REDUCTIONS[name](e[ok], axis=1)
     return out

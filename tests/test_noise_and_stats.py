@@ -87,6 +87,8 @@ def test_row_statistics_equal_the_statistic_of_each_row():
         # equal, not approximately: the search's choices must not depend on the batching
         np.testing.assert_array_equal(rows, [STATISTICS[name](r) for r in e])
     assert row_statistics("variance", e[:0]).shape == (0,)
+    # no errors at all: nothing to score, +inf (never NaN)
+    assert np.isinf(row_statistics("mean", e[:, :0])).all() and STATISTICS["p95"]([]) == np.inf
     with pytest.raises(ValueError, match="statistic"):
         row_statistics("median", e)
 
