@@ -256,11 +256,12 @@ def analytic_seeds(
     return out
 
 
-#: the swarm of ``seed_then_pso`` for a simulated cost: a few particles started around the
-#: seeds, moving on the scale of the candidate grid (docs/model.md, "Planning")
+#: the swarm of ``seed_then_pso`` for a simulated cost: the seeds and a particle started
+#: around them, scored on fresh draws; one iteration, what the swarm contributes
+#: (docs/model.md, "Planning"; BENCHMARKS.md, "What the swarm and the refinement add")
 LOCAL_SWARM = PSOOptions(
     particles=5,
-    iterations=2,
+    iterations=1,
     init_spread=0.1,
     velocity_clamp=0.03,
     init_velocity=0.01,
