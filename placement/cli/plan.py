@@ -255,7 +255,8 @@ def _print_result(res, args) -> None:
     extra = {} if swarm is None else swarm.extra
     if extra.get("resumed_from") is not None:
         print(f"resumed from checkpoint {args.checkpoint} after iteration {extra['resumed_from']}")
-    print(f"swarm: {res.nit} iterations, {res.nfev} evaluations, {res.message}")
+    its = "iteration" if res.nit == 1 else "iterations"
+    print(f"swarm: {res.nit} {its}, {res.nfev} evaluations, {res.message}")
     if swarm is not None and swarm.failures:
         print(
             f"  {swarm.failures} evaluation(s) failed and cost inf: "
