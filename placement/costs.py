@@ -92,7 +92,9 @@ class DrawsCost:
         nodes = checks.reals("nodes", self.nodes, shape=(None, None, 3))
         room.check_nodes(nodes.reshape(-1, 3))
         checks.count("exact_draws", self.exact_draws, low=0, high=nodes.shape[0])
-        checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
+        from placement.rangetable import check_mount_tolerance
+
+        check_mount_tolerance(self.mount_tolerance)
 
     @property
     def draws(self) -> int:

@@ -38,7 +38,7 @@ import numpy as np
 from analysis.fim import peb
 from placement.costs import DrawsCost, cost_name, make_cost
 from placement.pso import PSOOptions, PSOResult, pso
-from placement.rangetable import node_draws
+from placement.rangetable import check_mount_tolerance, node_draws
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, to_jsonable, write_json_atomic
 from placement.simselect import SearchOptions
@@ -631,7 +631,7 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         workers=(kw["workers"], 1, 1024),
     )
     sigma = checks.real("sigma", kw["sigma"], low=0.0, high=10.0, low_open=True, unit="m")
-    tol = checks.real("mount_tolerance", kw["mount_tolerance"], low=0.0, high=1.0, unit="m")
+    tol = check_mount_tolerance(kw["mount_tolerance"])
     rng = checks.rng_or_seed(kw["rng"], kw["seed"], owner="seed_then_pso")
     entropy = checks.entropy("rng", rng)
     search = _search_options(kw["search"])

@@ -122,6 +122,15 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
     return out
 
 
+#: the largest mounting error (m) a plan, a table or a validation accepts
+MAX_MOUNT_TOLERANCE = 1.0
+
+
+def check_mount_tolerance(value) -> float:
+    """The radius (m) of the in-plane mounting error, checked: in [0, MAX_MOUNT_TOLERANCE]."""
+    return checks.real("mount_tolerance", value, low=0.0, high=MAX_MOUNT_TOLERANCE, unit="m")
+
+
 def mounted_points(
     room: Room, candidates, ids, draw: int, tolerance: float, exact: bool, rng=0
 ) -> np.ndarray:
@@ -229,9 +238,7 @@ def range_table(
     draws = checks.count("draws", draws, low=1, high=1000)
     spec = {
         "exact_draws": checks.count("exact_draws", exact_draws, low=0, high=draws),
-        "mount_tolerance": checks.real(
-            "mount_tolerance", mount_tolerance, low=0.0, high=1.0, unit="m"
-        ),
+        "mount_tolerance": check_mount_tolerance(mount_tolerance),
         "seed": seed,
         "precision": checks.choice("precision", precision, PRECISIONS),
     }

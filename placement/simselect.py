@@ -35,7 +35,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from placement.rangetable import RangeTable, extend_table, range_table, table_costs
+from placement.rangetable import (
+    RangeTable,
+    check_mount_tolerance,
+    extend_table,
+    range_table,
+    table_costs,
+)
 from placement.result import LayoutResult
 from placement.surfaces import (
     candidate_grid,
@@ -240,7 +246,7 @@ class SearchOptions:
         checks.real("spacing", self.spacing, low=0.05, high=10.0, unit="m")
         checks.count("draws", self.draws, low=1, high=100)
         checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
-        checks.real("mount_tolerance", self.mount_tolerance, low=0.0, high=1.0, unit="m")
+        check_mount_tolerance(self.mount_tolerance)
         checks.count("chains", self.chains, low=1, high=10_000)
         if self.chain_draws is not None:
             checks.count("chain_draws", self.chain_draws, low=1, high=self.draws)

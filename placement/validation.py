@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import peb
-from placement.rangetable import mounted_points
+from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks
 from simulation.room import Room
@@ -139,7 +139,7 @@ def validate_layout(
     """
     opt = options or ValidationOptions()
     seed = checks.entropy("rng", rng)
-    mount_tolerance = checks.real("mount_tolerance", mount_tolerance, low=0.0, high=1.0, unit="m")
+    mount_tolerance = check_mount_tolerance(mount_tolerance)
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     out: dict[str, Any] = {}

@@ -73,9 +73,8 @@ class PositionFix:
         }
 
 
-def _region(anchors: np.ndarray, region) -> tuple[np.ndarray, np.ndarray]:
-    if region is None:
-        return anchors.min(axis=0), anchors.max(axis=0)
+def _region(region) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lo (3,), hi (3,)) of a given ``region``, checked."""
     try:
         lo, hi = (checks.reals("region", v, shape=(3,)) for v in region)
     except (TypeError, ValueError):
@@ -240,7 +239,7 @@ def _rows(a: np.ndarray, B: int, region):
     if region is None:
         lo, hi = a.min(axis=1)[owner], a.max(axis=1)[owner]
     else:
-        lo, hi = _region(a, region)  # a given region does not depend on the anchors
+        lo, hi = _region(region)
         lo, hi = np.broadcast_to(lo, (B, 3)), np.broadcast_to(hi, (B, 3))
     return owner, lo, hi
 

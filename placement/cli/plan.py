@@ -139,6 +139,7 @@ def _check_args(args, room):
     """Every number and file of the command, checked before any work; returns the
     search settings."""
     from placement.pso import MAX_ANCHORS, MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
+    from placement.rangetable import MAX_MOUNT_TOLERANCE
     from placement.surfaces import candidate_grid
     from simulation.evaluation import BYTES_PER_RANGE
 
@@ -162,7 +163,9 @@ def _check_args(args, room):
         raise ValueError("--scheduler and --workers: choose one")
     if args.eval_timeout is not None:
         checks.real("--eval-timeout", args.eval_timeout, low=0.0, low_open=True, unit="s")
-    checks.real("--mount-tolerance", args.mount_tolerance, low=0.0, high=1.0, unit="m")
+    checks.real(
+        "--mount-tolerance", args.mount_tolerance, low=0.0, high=MAX_MOUNT_TOLERANCE, unit="m"
+    )
     search = _search_options(args)
     M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
     if not args.no_seeds and args.cost != "peb":
