@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from placement.serialization import to_jsonable
+from placement.surfaces import MAX_ANCHORS
 from simulation import checks
 from simulation.room import Room, room_or_default
 
@@ -82,7 +83,7 @@ def _counts(anchors) -> list[int]:
         ) from None
     if not values:
         raise ValueError("anchors: expected at least one anchor count, got none")
-    out = sorted({checks.count("anchors", m, low=4, high=100) for m in values})
+    out = sorted({checks.count("anchors", m, low=4, high=MAX_ANCHORS) for m in values})
     return out
 
 

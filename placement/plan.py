@@ -37,12 +37,12 @@ import numpy as np
 
 from analysis.fim import peb
 from placement.costs import DrawsCost, cost_name, make_cost
-from placement.pso import PSOOptions, PSOResult, pso
+from placement.pso import MAX_ITERATIONS, MAX_PARTICLES, PSOOptions, PSOResult, pso
 from placement.rangetable import check_mount_tolerance, node_draws
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, to_jsonable, write_json_atomic
 from placement.simselect import SearchOptions
-from placement.surfaces import project, random_layout
+from placement.surfaces import MAX_ANCHORS, project, random_layout
 from placement.validation import ValidationOptions, validate_layout
 from placement.workers import executor_workers, run_calls
 from simulation import checks
@@ -619,10 +619,10 @@ def seed_then_pso(
 
 def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     """Check every argument before any work; returns the run's resolved settings."""
-    M = checks.count("M", kw["M"], low=4, high=100)
+    M = checks.count("M", kw["M"], low=4, high=MAX_ANCHORS)
     counts = _check_counts(
-        particles=(kw["particles"], 2, 10_000),
-        iterations=(kw["iterations"], 1, 100_000),
+        particles=(kw["particles"], 2, MAX_PARTICLES),
+        iterations=(kw["iterations"], 1, MAX_ITERATIONS),
         finalists=(kw["finalists"], 1, 1000),
         finalist_draws=(kw["finalist_draws"], 1, 1000),
         finalist_exact_draws=(kw["finalist_exact_draws"], 0, 1000),

@@ -37,7 +37,7 @@ import numpy as np
 
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, write_json_atomic
-from placement.surfaces import project, random_layout
+from placement.surfaces import MAX_ANCHORS, project, random_layout
 from placement.workers import ExecutorBroken, WorkerPool, executor_workers
 from simulation import checks
 from simulation.room import Room, as_room
@@ -75,8 +75,8 @@ def default_eval_timeout(seconds: float | None):
         _EVAL_TIMEOUT.reset(token)
 
 
-#: upper limits of the swarm's size and length, and of the number of anchors
-MAX_PARTICLES, MAX_ITERATIONS, MAX_ANCHORS = 10_000, 100_000, 100
+#: upper limits of the swarm's size and length
+MAX_PARTICLES, MAX_ITERATIONS = 10_000, 100_000
 
 
 @dataclass(frozen=True)

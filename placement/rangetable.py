@@ -122,6 +122,9 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
     return out
 
 
+#: the most draws a range table holds
+MAX_TABLE_DRAWS = 1000
+
 #: the largest mounting error (m) a plan, a table or a validation accepts
 MAX_MOUNT_TOLERANCE = 1.0
 
@@ -235,7 +238,7 @@ def range_table(
         nodes = room.check_nodes(nodes)
     else:
         raise ValueError(f"nodes: expected (P, 3) or (D, P, 3) with D >= 1, got {nodes.shape}")
-    draws = checks.count("draws", draws, low=1, high=1000)
+    draws = checks.count("draws", draws, low=1, high=MAX_TABLE_DRAWS)
     spec = {
         "exact_draws": checks.count("exact_draws", exact_draws, low=0, high=draws),
         "mount_tolerance": check_mount_tolerance(mount_tolerance),

@@ -36,6 +36,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from placement.rangetable import (
+    MAX_TABLE_DRAWS,
     RangeTable,
     check_mount_tolerance,
     extend_table,
@@ -44,6 +45,7 @@ from placement.rangetable import (
 )
 from placement.result import LayoutResult
 from placement.surfaces import (
+    MAX_ANCHORS,
     candidate_grid,
     mounting_surfaces,
     new_points,
@@ -244,7 +246,7 @@ class SearchOptions:
 
     def __post_init__(self) -> None:
         checks.real("spacing", self.spacing, low=0.05, high=10.0, unit="m")
-        checks.count("draws", self.draws, low=1, high=100)
+        checks.count("draws", self.draws, low=1, high=MAX_TABLE_DRAWS)
         checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
         check_mount_tolerance(self.mount_tolerance)
         checks.count("chains", self.chains, low=1, high=10_000)
@@ -412,7 +414,7 @@ def simulated_select(
         (stage "search") as it goes.
     """
     opt = options or SearchOptions()
-    M = checks.count("M", M, low=4, high=1000)
+    M = checks.count("M", M, low=4, high=MAX_ANCHORS)
     seed = checks.entropy("rng", rng)
     workers = checks.count("workers", workers, low=1, high=1024)
     t0 = time.perf_counter()

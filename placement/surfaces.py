@@ -29,6 +29,9 @@ from simulation.room import SURFACES, Room, as_room
 #: most candidate points :func:`candidate_grid` makes, and most anchors of a random layout
 MAX_CANDIDATES, MAX_LAYOUT_ANCHORS = 1_000_000, 100_000
 
+#: the most anchors a plan places: the bound on M of the swarm, the search and the plan
+MAX_ANCHORS = 100
+
 
 @dataclass(frozen=True)
 class MountingSurface:

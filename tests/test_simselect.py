@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 import simulation
+from placement.plan import seed_then_pso
 from placement.rangetable import (
+    MAX_TABLE_DRAWS,
     extend_table,
     mounted_points,
     node_draws,
@@ -23,7 +25,7 @@ from placement.simselect import (
     refine_on_table,
     simulated_select,
 )
-from placement.surfaces import candidate_grid, on_surfaces, surface_index
+from placement.surfaces import MAX_ANCHORS, candidate_grid, on_surfaces, surface_index
 from simulation import Room
 
 ROOM = Room.techtile()
@@ -207,3 +209,21 @@ def test_search_options_are_checked():
         simulated_select(ROOM, 8, table=t, options=_small())
     with pytest.raises(ValueError, match="M"):
         simulated_select(ROOM, 3, table=t, options=_small())
+
+
+def test_search_bounds_are_those_of_the_table_and_the_plan():
+    """The search accepts what the table and the plan accept, and no more."""
+    assert SearchOptions(draws=MAX_TABLE_DRAWS).draws == MAX_TABLE_DRAWS
+    for call in (
+        lambda: SearchOptions(draws=MAX_TABLE_DRAWS + 1),
+        lambda: range_table(ROOM, CAND[:6], NODES, draws=MAX_TABLE_DRAWS + 1, rng=0),
+    ):
+        with pytest.raises(ValueError, match=f"draws: .*1, {MAX_TABLE_DRAWS}"):
+            call()
+    t = range_table(ROOM, CAND[:6], NODES, rng=0)
+    for call in (
+        lambda: simulated_select(ROOM, MAX_ANCHORS + 1, table=t, options=_small()),
+        lambda: seed_then_pso(ROOM, M=MAX_ANCHORS + 1),
+    ):
+        with pytest.raises(ValueError, match=f"M: .*{MAX_ANCHORS}"):
+            call()

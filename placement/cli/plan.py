@@ -138,9 +138,9 @@ def _search_options(args):
 def _check_args(args, room):
     """Every number and file of the command, checked before any work; returns the
     search settings."""
-    from placement.pso import MAX_ANCHORS, MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
+    from placement.pso import MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
     from placement.rangetable import MAX_MOUNT_TOLERANCE
-    from placement.surfaces import candidate_grid
+    from placement.surfaces import MAX_ANCHORS, candidate_grid
     from simulation.evaluation import BYTES_PER_RANGE
 
     if args.particles is not None:
