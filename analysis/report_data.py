@@ -102,18 +102,22 @@ class Context:
 
     @property
     def result(self) -> dict | None:
+        """The run's result.json, if the folder has one."""
         return self.data.get("result")
 
     @property
     def evaluation(self) -> dict | None:
+        """The run's evaluation.json, if the folder has one."""
         return self.data.get("evaluation")
 
     @property
     def best(self) -> LayoutEntry:
+        """The main layout (the first)."""
         return self.layouts[0]
 
     @property
     def reference(self) -> LayoutEntry | None:
+        """The reference layout the report compares with, if any."""
         return next((e for e in self.layouts if e.role == "reference"), None)
 
 
@@ -192,8 +196,7 @@ def _per_node(per_node: dict, key: str, source: str, P: int) -> np.ndarray | Non
 def _sim_from_json(block: dict, P: int, R: int | None, source: str) -> Simulated | None:
     """Simulated from a validation/evaluation block; None without errors or per-node RMSE.
 
-    ``per_node.dop`` is the paper's DOP and ``per_node.dop_rms`` the RMS-based one (the
-    files written since issue 15; before, ``dop`` held the RMS-based one)."""
+    ``per_node.dop`` is the paper's DOP and ``per_node.dop_rms`` the RMS-based one."""
     errors = block.get("errors")
     per_node = block.get("per_node") or {}
     e = json_array(errors, f"{source} errors", 2) if errors is not None else None

@@ -40,6 +40,7 @@ class SweepRow:
     seconds: float
 
     def to_dict(self) -> dict[str, Any]:
+        """The row as plain JSON types (anchors as nested lists)."""
         d = {k: getattr(self, k) for k in self.__dataclass_fields__}
         d["anchors"] = np.asarray(self.anchors).tolist()
         return d
@@ -59,6 +60,7 @@ class SweepResult:
     timings: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """The sweep as plain JSON types (``kind`` "sweep")."""
         return {
             "kind": "sweep",
             "rows": [r.to_dict() for r in self.rows],
@@ -136,7 +138,7 @@ def sweep(
     if "table" in kw:
         raise ValueError("table: sweep builds the shared table itself; do not pass one")
     t0 = time.perf_counter()
-    search = _search_options(kw.pop("search", None))
+    search = _search_options(kw.pop("search", None), kw.pop("mount_tolerance", None))
     entropy = checks.entropy("rng", kw.pop("rng", 0))
     table = None
     if (

@@ -75,7 +75,7 @@ class DrawsCost:
     points, the others mount each anchor within ``mount_tolerance`` (m) of its planned
     point in its surface plane; positioning uses the planned points. The cost is then a
     deterministic function of the layout (the generator is ignored), so a swarm compares
-    its particles without noise between them (docs/model.md, "Robust cost").
+    its particles without noise between them (docs/model.md, "Range tables and scene draws").
     """
 
     room: Room
@@ -98,6 +98,7 @@ class DrawsCost:
 
     @property
     def draws(self) -> int:
+        """D, the number of scene draws."""
         return int(np.shape(self.nodes)[0])
 
     def errors(self, anchors) -> np.ndarray:

@@ -8,9 +8,9 @@ The problem (design inputs, the FIM table, the criteria "A", "D", "minimax" in m
 that of :mod:`placement.selection`, shared with the relaxation.
 
 Subsets are enumerated as a prefix of M − 2 candidates (a Python loop) times every pair of
-later candidates (vectorized, in cache-sized blocks) on the tabulated FIM entries, which is
-much faster than calling ``analysis.crlb_trace`` on an (L, M, 3) batch of layouts (same
-numbers, the tests check it, but the unit vectors are recomputed for every subset).
+later candidates (vectorized, in cache-sized blocks) on the tabulated FIM entries: the same
+numbers as ``analysis.crlb_trace`` on an (L, M, 3) batch of layouts (the tests check it),
+without recomputing the unit vectors for every subset.
 """
 
 from __future__ import annotations

@@ -1,23 +1,26 @@
-"""The whole chain: search → swarm → finalists → validation (docs/model.md, "Planning").
+"""The whole chain: search → swarm → refinement → finalists → validation (docs/model.md,
+"The whole chain: seed_then_pso").
 
 ``seed_then_pso(room, M=8)`` plans M anchors for a simulated cost:
 
 1. **Range table and search** (:mod:`placement.rangetable`, :mod:`placement.simselect`):
    every candidate mounting point is simulated at the nodes of a few scene draws (the
    exact nodes, and nodes moved within their cells with the anchors mounted within
-   ``mount_tolerance``); a multi-start, multi-resolution swap search on the table finds
-   the seed layouts.
-2. **Swarm** (:mod:`placement.pso`): a particle swarm started around the seeds refines
-   them in continuous positions on the surfaces, every particle scored on the same scene
-   draws as the table (common random numbers, :class:`placement.costs.DrawsCost`).
-3. **Finalists**: the swarm's best distinct layouts and the seeds are scored on fresh
-   draws (new nodes, mounting errors and noise) and the lowest is chosen, so that a
-   layout fitted to the draws it was optimized on does not win by luck.
-4. **Validation** (:mod:`placement.validation`): the chosen layout at the evaluation nodes
+   ``mount_tolerance``); a multi-start swap search on the table finds the seed layouts.
+2. **Swarm** (:mod:`placement.pso`): the seeds and a particle started around them, in
+   continuous positions on the surfaces, every particle scored on the same scene draws
+   as the table (common random numbers, :class:`placement.costs.DrawsCost`); one
+   iteration by default (:data:`LOCAL_SWARM`).
+3. **Refinement** (:func:`placement.simselect.refine_on_table`): the swarm's best layout
+   descends on finer lattices of table columns around its anchors.
+4. **Finalists**: the refined layout, the swarm's best and the seeds are scored on fresh
+   draws (new noise) and the lowest is chosen, so that a layout fitted to the draws it
+   was optimized on does not win by luck.
+5. **Validation** (:mod:`placement.validation`): the chosen layout at the evaluation nodes
    with many noise realizations (the paper's statistics), at held-out nodes, and under
    mounting error.
 
-Bound-driven costs ("peb") and user callables skip step 1 and seed the swarm with the
+Bound-driven costs ("peb") and user callables skip steps 1, 3 and 4 and seed the swarm with the
 convex relaxations and their refinements instead (:func:`analytic_seeds`).
 """
 
@@ -88,6 +91,7 @@ class SeedLayout:
     table_cost: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
+        """The seed as plain JSON types."""
         return {
             "name": self.name,
             "anchors": np.asarray(self.anchors).tolist(),
@@ -142,6 +146,7 @@ class PlacementResult(LayoutResult):
     finalists: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
+        """The plan as plain JSON types (``kind`` "plan"); :meth:`from_dict` reads it back."""
         return {
             "kind": "plan",
             "room": self.room.to_dict(),
@@ -258,7 +263,7 @@ def analytic_seeds(
 
 #: the swarm of ``seed_then_pso`` for a simulated cost: the seeds and a particle started
 #: around them, scored on fresh draws; one iteration, what the swarm contributes
-#: (docs/model.md, "Planning"; BENCHMARKS.md, "What the swarm and the refinement add")
+#: (docs/model.md, "Particle swarm optimization")
 LOCAL_SWARM = PSOOptions(
     particles=5,
     iterations=1,
@@ -296,19 +301,32 @@ def _swarm_options(options, particles, iterations, simulated: bool) -> PSOOption
     return dataclasses.replace(base, **changes)
 
 
-def _search_options(search) -> SearchOptions:
+def _search_options(search, mount_tolerance=None) -> SearchOptions:
+    """The search's settings: ``search`` (SearchOptions, a dict of its fields, or None for
+    the defaults) with the plan's ``mount_tolerance`` when given; a clash is an error."""
     if search is None:
-        return SearchOptions()
-    if isinstance(search, SearchOptions):
-        return search
-    if not isinstance(search, dict):
+        opt, given = SearchOptions(), None
+    elif isinstance(search, SearchOptions):
+        opt, given = search, search.mount_tolerance
+    elif isinstance(search, dict):
+        allowed = [f.name for f in dataclasses.fields(SearchOptions)]
+        checks.known_keys("search", search, allowed)
+        opt = SearchOptions(**search)
+        given = opt.mount_tolerance if "mount_tolerance" in search else None
+    else:
         raise ValueError(
             "search: must be a SearchOptions or a dict of its fields, "
             f"got {checks.describe(search)}"
         )
-    allowed = [f.name for f in dataclasses.fields(SearchOptions)]
-    checks.known_keys("search", search, allowed)
-    return SearchOptions(**search)
+    if mount_tolerance is None:
+        return opt
+    tol = check_mount_tolerance(mount_tolerance)
+    if given is not None and given != tol:
+        raise ValueError(
+            f"mount_tolerance: {tol:g} m contradicts search.mount_tolerance = {given:g} m; "
+            "give one of them"
+        )
+    return dataclasses.replace(opt, mount_tolerance=tol)
 
 
 class _Clock:
@@ -528,7 +546,7 @@ def seed_then_pso(
     options: PSOOptions | None = None,
     particles: int | None = None,
     iterations: int | None = None,
-    mount_tolerance: float = 0.03,
+    mount_tolerance: float | None = None,
     finalists: int = 1,
     finalist_draws: int = 12,
     finalist_exact_draws: int | None = None,
@@ -561,8 +579,10 @@ def seed_then_pso(
         for a simulated cost with seeds, the paper's ``PSOOptions()`` otherwise);
         ``particles`` and ``iterations`` set those fields, and must agree with
         ``options`` when both given.
-    mount_tolerance : radius (m) of the in-plane mounting error in the scored draws and in
-        the validation.
+    mount_tolerance : radius (m) of the in-plane mounting error in the table's moved draws,
+        the swarm's and finalists' draws and the validation (None: the search's,
+        ``SearchOptions.mount_tolerance``, 0.03 m); it must agree with ``search`` and
+        ``table`` when they set one.
     finalists, finalist_draws : how many of the swarm's best distinct layouts, together
         with the seeds and the refined layout, are scored on ``finalist_draws`` fresh
         draws before choosing.
@@ -631,10 +651,10 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
         workers=(kw["workers"], 1, 1024),
     )
     sigma = checks.real("sigma", kw["sigma"], low=0.0, high=10.0, low_open=True, unit="m")
-    tol = check_mount_tolerance(kw["mount_tolerance"])
+    search = _search_options(kw["search"], kw["mount_tolerance"])
+    tol = search.mount_tolerance
     rng = checks.rng_or_seed(kw["rng"], kw["seed"], owner="seed_then_pso")
     entropy = checks.entropy("rng", rng)
-    search = _search_options(kw["search"])
     cost = kw["cost"]
     cost_fn = make_cost(
         cost, room, realizations=counts["realizations"], nodes=kw["nodes"], sigma=sigma
@@ -670,6 +690,11 @@ def _prepare(room: Room, kw: dict) -> dict[str, Any]:
     table = kw["table"]
     if table is not None and not hasattr(table, "ranges"):
         raise ValueError(f"table: must be a RangeTable or None, got {checks.describe(table)}")
+    if table is not None and table.mount_tolerance != tol:
+        raise ValueError(
+            f"table: built with mount_tolerance {table.mount_tolerance:g} m, the run's is "
+            f"{tol:g} m; pass mount_tolerance={table.mount_tolerance:g} or build it with {tol:g}"
+        )
     return {
         "table": table,
         "M": M,
@@ -823,7 +848,7 @@ def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock:
     if run["simulated"] and res.success and (run["finalists"] > 1 or seed_layouts or refined):
         # new noise, by default at the exact nodes: the candidates already come from a
         # search whose draws include moved ones, and the choice among near-equal optima
-        # needs draws that vary little (BENCHMARKS.md, "The finalists' choice")
+        # needs draws that vary little (docs/model.md, "The whole chain: seed_then_pso")
         exact = run["finalist_exact_draws"]
         fresh = _draws_cost(
             room, run, run["finalist_draws"], exact, key="finalists", nodes_key="finalist_nodes"

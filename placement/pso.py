@@ -165,6 +165,7 @@ class PSOResult(LayoutResult):
         return nfev_to_reach(self.costs, target)
 
     def to_dict(self) -> dict[str, Any]:
+        """The result as plain JSON types (arrays as nested lists)."""
         d = asdict(self)
         d["anchors"] = self.anchors.tolist()
         d["best_anchors_history"] = [np.asarray(a).tolist() for a in self.best_anchors_history]

@@ -1,7 +1,7 @@
 """Range tables: simulated ranges of every candidate mounting point at every node.
 
 Anchors transmit one at a time and each anchor's noise level is set by its own reference
-node (docs/model.md, "Noise"), so the range that a node measures from an anchor depends on
+node (docs/model.md, "The noise rule"), so the range that a node measures from an anchor depends on
 that anchor, that node and the noise only, never on the other anchors. Simulating every
 candidate point against every node once therefore gives the exact simulated ranges of
 every layout built from the candidates, and scoring such a layout costs only the
@@ -18,7 +18,7 @@ mounting error of every candidate and its own receiver noise:
   would.
 
 Scored over all draws, a layout is good where the tags will be and as it will be
-mounted, not only at one fixed set of nodes (docs/model.md, "Robust cost").
+mounted, not only at one fixed set of nodes (docs/model.md, "Range tables and scene draws").
 
 Randomness: draw d's nodes come from ``SeedSequence(seed, spawn_key=(3, d))``; candidate
 j's offset in draw d from ``(2, j, d)`` and its noise from ``(0, j, d)``. The table does

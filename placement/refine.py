@@ -18,8 +18,8 @@ mapped over the P nodes (``Function.map``), and is either
   (``temperature`` τ in metres; default 5 % of the initial mean PEB).
 
 Gradients are exact (reverse-mode AD through the map). IPOPT's default here is its
-limited-memory quasi-Newton Hessian (history 20), faster than the exact one for this
-small, dense problem (measurements: docs/implementation.md); ``hessian="exact"`` gives
+limited-memory quasi-Newton Hessian (history 20; docs/implementation.md compares it with
+the exact one on this small, dense problem); ``hessian="exact"`` gives
 IPOPT the exact Hessian, from the per-node SX Hessian mapped and summed over the nodes
 (plus the log-mean-exp curvature term for "smoothmax").
 

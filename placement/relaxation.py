@@ -17,8 +17,7 @@ selection. Criteria, all *minimized* (see :mod:`placement.selection` for the uni
 All P LMIs are one batched (P, 6, 6) PSD constraint built from a single sparse matrix,
 which keeps cvxpy's canonicalization short. σ is normalized to 1 inside the solver
 (σ_n/σ_ref with σ_ref the geometric mean) and the results are rescaled, because Clarabel
-fails on the unnormalized data (J ~ 10³/m²). Measurements behind these choices:
-docs/implementation.md.
+fails on the unnormalized data (J ~ 10³/m²); docs/implementation.md.
 
 Certificate. The lower bound is not the solver's number: it is recomputed in numpy from the
 relaxed weights w* by convexity (the Frank–Wolfe / Lagrangian bound). For a convex f and
@@ -146,6 +145,7 @@ class Selection(LayoutResult):
 
     @property
     def M(self) -> int:
+        """The number of chosen anchors."""
         return int(self.indices.size)
 
 

@@ -8,16 +8,18 @@ simulation. The search (docs/model.md, "Range-table search"):
 1. **Stochastic swap search.** From the best of a few random layouts, one anchor at a
    time: a random sample of ``batch`` of its ``neighbours`` nearest unused candidates is
    scored in one batch and the best swap is taken if it lowers the cost. After
-   ``patience`` samples in a row without a gain, the best layout so far is kicked (two
+   ``patience`` such steps in a row without a gain, the best layout so far is kicked (two
    anchors moved to random neighbours) and the search goes on from there, until its
    evaluation budget is spent. Several such chains run from different starts.
-2. **Descent.** Each chain's best layout is finished by a best-improvement descent over
-   the full neighbourhood, so every returned layout is a local optimum: no single swap
-   of an anchor with one of its ``neighbours`` nearest candidates lowers its cost.
-3. **Multi-resolution** (optional). The best distinct optima get table columns for finer
-   candidate points around each of their anchors (:func:`placement.rangetable.extend_table`)
-   and descend again on the grown table, resolving them to the fine spacing without
-   simulating a fine grid over whole surfaces.
+2. **Descent.** Each chain's best layout is finished by a best-improvement descent on the
+   whole table, so every returned layout is a local optimum: no single swap of an anchor
+   with one of its ``finish_neighbours`` nearest candidates lowers its cost.
+
+:func:`simulated_select` does both. :func:`refine_on_table` is the multi-resolution step
+that follows it in a plan (docs/model.md, "Refinement after the swarm"): given layouts get
+table columns for finer candidate points around each of their anchors
+(:func:`placement.rangetable.extend_table`) and descend again on the grown table, resolving
+them to the fine spacing without simulating a fine grid over whole surfaces.
 
 Every random choice comes from streams derived from ``seed`` and the chain's number;
 results do not depend on the executor or the number of workers.
@@ -404,8 +406,8 @@ def simulated_select(
     """Choose M of the candidate points minimizing a simulated error statistic on a range
     table (the module docstring gives the steps).
 
-    table : a table to search (built from ``options`` and ``nodes`` when None; it grows
-        by the fine lattices and is returned in the result).
+    table : a table to search (built from ``options`` and ``nodes`` when None); it is
+        returned in the result.
     rng : an int seed of the table and of every chain's stream, a numpy Generator (drawn
         once) or None.
     executor, workers : the chains run as ``workers`` jobs on ``executor``; the result
@@ -545,6 +547,7 @@ class SimulatedSelection(LayoutResult):
         return np.stack([self.candidates[S] for S, _ in self.optima[:k]])
 
     def to_dict(self) -> dict[str, Any]:
+        """The selection as plain JSON types (the table itself left out)."""
         return {
             "anchors": self.anchors.tolist(),
             "indices": self.indices.tolist(),

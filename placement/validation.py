@@ -1,5 +1,6 @@
 """Validation of a planned layout: the paper's statistics and whether they hold where the
-tags will be and as the anchors will be mounted (docs/model.md, "Validation").
+tags will be and as the anchors will be mounted (docs/model.md, "The whole chain:
+seed_then_pso", step 5).
 
 Three checks, each with its own independent noise:
 

@@ -237,6 +237,7 @@ class WorkerPool(Executor):
 
     # -- Executor API ------------------------------------------------------------------------
     def submit(self, fn, /, *args, **kwargs) -> Future:
+        """Schedule ``fn(*args, **kwargs)`` on a worker (``concurrent.futures.Executor``)."""
         if self._shutdown:
             raise RuntimeError("cannot schedule new tasks after shutdown")
         task = _Task(next(self._ids), fn, args, kwargs)
@@ -263,6 +264,7 @@ class WorkerPool(Executor):
         return True
 
     def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        """Stop the workers (``concurrent.futures.Executor.shutdown``)."""
         self._shutdown = True
         with self._lock:
             pool = self._pool

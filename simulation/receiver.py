@@ -22,8 +22,7 @@ of the window), so they are folded into one (Nc, N) matrix G applied to a batch 
 matrix product; step 3 is a product with |H|² in the frequency domain (one rfft and one
 irfft of size ≥ Nc + taps − 1, no wrap-around), in blocks that can run on several threads.
 
-The float64 chain is bound by that product and the two FFTs; its timings and the
-shortcuts that were tried and not kept are in docs/implementation.md.
+The float64 chain is bound by that product and the two FFTs (docs/implementation.md).
 """
 
 from __future__ import annotations
@@ -169,8 +168,9 @@ def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | Non
 
 
 PRECISIONS = ("float64", "float32")
-#: the simulator's default DSP precision: float32 picks the float64 index for 99.96 % of
-#: techtile windows (benchmarks/bench_precision.py); "float64" stays selectable
+#: the simulator's default DSP precision: float32 picks the float64 correlation index for
+#: all but a few windows in 10⁴ (docs/model.md, "The receiver chain"); "float64" stays
+#: selectable
 DEFAULT_PRECISION = "float32"
 
 #: size of the correlation buffer of one part (bytes): a part's correlation is one matrix
@@ -184,11 +184,11 @@ class Dsp:
     Build with :func:`dsp_for` (cached). ``indices(windows)`` maps windows (..., N) to the
     snapped full-correlation indices (...,) and ``ranges(windows, c)`` to metres.
 
-    ``precision="float64"`` (default) gives the index of :func:`reference_chain`.
-    ``"float32"`` runs the correlation and low-pass in single precision, faster
-    (docs/implementation.md); rounding then moves the low-pass argmax of a few windows in
-    10⁴ onto a neighbouring raw peak (tested: ≥ 99.5 % identical indices) — meant for
-    optimizer inner loops, not for reported figures.
+    ``precision="float64"`` (this class's default) gives the index of
+    :func:`reference_chain`. ``"float32"`` (the simulator's default,
+    :data:`DEFAULT_PRECISION`) runs the correlation and low-pass in single precision;
+    rounding then moves the low-pass argmax of a few windows in 10⁴ onto a neighbouring
+    raw peak (docs/model.md, "The receiver chain").
     """
 
     def __init__(self, chirp: Chirp, receiver: Receiver, precision: str = "float64"):

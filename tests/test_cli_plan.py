@@ -42,3 +42,22 @@ def test_plan_bad_input_exit_2(tmp_path, capsys):
     assert "--anchors" in capsys.readouterr().err
     assert main(["plan", "--particles", "1", "--out", str(tmp_path)]) == 2
     assert "particles" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "particles"),
+    [([], 5), (["--no-seeds"], 15), (["--cost", "peb"], 15), (["--particles", "7"], 7)],
+)
+def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
+    """--finalists may be as large as the swarm the library runs for that command."""
+    from placement.cli import build_parser
+    from placement.cli.plan import _check_args
+
+    room = Room.techtile()
+    ok = build_parser().parse_args(["plan", *argv, "--finalists", str(particles)])
+    _check_args(ok, room)
+    bad = build_parser().parse_args(["plan", *argv, "--finalists", str(particles + 1)])
+    with pytest.raises(
+        ValueError, match=f"--finalists: must be an integer in \\[1, {particles}\\]"
+    ):
+        _check_args(bad, room)

@@ -135,6 +135,24 @@ def test_options_are_honoured_and_clashes_refused():
         _plan(particles=5, options=placement.PSOOptions(4, 2))
 
 
+def test_the_mounting_tolerance_reaches_every_stage_and_clashes_are_refused():
+    res = _plan(search={**SMALL.__dict__, "mount_tolerance": 0.0}, iterations=1)
+    assert res.settings["search"]["mount_tolerance"] == 0.0 == res.settings["mount_tolerance"]
+    # the plan's tolerance sets the table's: a search without one takes it
+    a = _plan(search={**SMALL.__dict__, "mount_tolerance": 0.2}, iterations=1)
+    b = _plan(search={k: v for k, v in SMALL.__dict__.items() if k != "mount_tolerance"},
+              mount_tolerance=0.2, iterations=1)  # fmt: skip
+    assert b.settings["search"]["mount_tolerance"] == 0.2
+    np.testing.assert_array_equal(a.anchors, b.anchors)
+    assert a.validation["std"] == b.validation["std"]
+    with pytest.raises(ValueError, match="mount_tolerance: 0.05 m contradicts search"):
+        _plan(mount_tolerance=0.05)  # SMALL sets 0.03
+    t = range_table(ROOM, ROOM.corners_layout(), NODES, draws=2, exact_draws=1,
+                    mount_tolerance=0.03, rng=0)  # fmt: skip
+    with pytest.raises(ValueError, match="table: built with mount_tolerance 0.03"):
+        _plan(search=None, mount_tolerance=0.05, table=t)
+
+
 def test_seed_then_pso_rejects_bad_input():
     with pytest.raises(ValueError, match="M"):
         seed_then_pso(ROOM, 3, cost="peb", seeds=None, progress=False)

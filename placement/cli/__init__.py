@@ -45,6 +45,7 @@ class _Warnings(logging.Handler):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``anchorplan`` argument parser with every subcommand."""
     parser = _Parser(
         prog="anchorplan",
         description="Anchor layout planning for ultrasonic time-of-flight indoor positioning.",

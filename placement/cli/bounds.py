@@ -9,6 +9,7 @@ from simulation import checks
 
 
 def register(sub) -> None:
+    """Add ``anchorplan bounds`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "bounds",
         help="PEB statistics of a layout (default: the corners layout) on the node grid",
@@ -23,6 +24,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    """Run ``anchorplan bounds`` on parsed ``args``; the exit status (0: done)."""
     if args.out is not None:
         output_file("--out", args.out)
     lo, hi = SIGMA_RANGE

@@ -24,6 +24,7 @@ __all__ = [
 
 
 def add_room_argument(parser) -> None:
+    """Add ``--room`` (a room TOML file; default: the embedded techtile room)."""
     parser.add_argument(
         "--room",
         metavar="R.toml",

@@ -16,6 +16,7 @@ from simulation import checks
 
 
 def register(sub) -> None:
+    """Add ``anchorplan evaluate`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "evaluate",
         help="simulate a layout (chirps, reverberation, noise, DSP, LS positioning)",
@@ -37,6 +38,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    """Run ``anchorplan evaluate`` on parsed ``args``; the exit status (0: done)."""
     from simulation import evaluate_layout
     from simulation.evaluation import BYTES_PER_RANGE
     from simulation.noise import check_snr

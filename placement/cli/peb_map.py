@@ -16,6 +16,7 @@ SIZE_RANGE = (1.0, 100.0)  # inches
 
 
 def register(sub) -> None:
+    """Add ``anchorplan peb-map`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "peb-map",
         help="draw PEB heat maps of a layout (slices at heights, x/y cuts) to an image",
@@ -43,6 +44,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    """Run ``anchorplan peb-map`` on parsed ``args``; the exit status (0: done)."""
     from analysis import figures
     from analysis.noise import SIGMA_RANGE
 

@@ -20,6 +20,7 @@ MAX_SEARCH_CANDIDATES = 10_000
 
 
 def register(sub) -> None:
+    """Add ``anchorplan plan`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "plan",
         help="optimize an anchor layout (range-table search + swarm on the full simulation)",
@@ -149,8 +150,11 @@ def _check_args(args, room):
         checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
     checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
     from placement.plan import LOCAL_SWARM
+    from placement.pso import PSOOptions
 
-    particles = args.particles or (LOCAL_SWARM.particles if not args.no_seeds else 15)
+    # the library's swarm: the local one for a simulated cost with seeds, the paper's else
+    local = not args.no_seeds and args.cost != "peb"
+    particles = args.particles or (LOCAL_SWARM if local else PSOOptions()).particles
     checks.count("--finalists", args.finalists, low=1, high=particles)
     checks.count("--finalist-draws", args.finalist_draws, low=1, high=MAX_REALIZATIONS)
     if args.finalist_exact_draws is not None:
@@ -199,6 +203,7 @@ def _check_args(args, room):
 
 
 def run(args) -> int:
+    """Run ``anchorplan plan`` on parsed ``args``; the exit status (0: done)."""
     from placement.plan import seed_then_pso
     from placement.pso import default_eval_timeout
 

@@ -12,6 +12,7 @@ MAX_REALIZATIONS = 10_000
 
 
 def register(sub) -> None:
+    """Add ``anchorplan report`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "report",
         help="write a self-contained HTML report (figures embedded) of a result folder",
@@ -42,6 +43,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    """Run ``anchorplan report`` on parsed ``args``; the exit status (0: done)."""
     from analysis.noise import SIGMA_RANGE
     from analysis.report import write_report
     from analysis.report_data import load_results, main_anchors, room_of

@@ -13,6 +13,7 @@ from simulation import checks
 
 
 def register(sub) -> None:
+    """Add ``anchorplan sweep`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "sweep",
         help="plan every anchor count of a range and recommend the smallest that meets a P95",
@@ -51,6 +52,7 @@ def parse_counts(text: str) -> list[int]:
 
 
 def run(args) -> int:
+    """Run ``anchorplan sweep`` on parsed ``args``; the exit status (0: done)."""
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
