@@ -8,7 +8,8 @@ M; each run is ``seed_then_pso`` with its defaults except the search's settings 
 
 With ``--table-seed T`` every run searches seed T's table instead of its own: the search,
 swarm, finalists and validation keep the run's seed, so the spread over seeds is then
-what the run's other random choices make of one table.
+what the run's other random choices make of one table. ``--first-seed S`` runs seeds
+S, S + 1, … instead of 0, 1, … (other seeds than the benchmark's, same settings).
 
 One JSON line per run: the validated σ / mean / P95 at the 270 nodes (R = 100, the run's
 own validation noise), σ at the held-out grid, the random points and under mounting
@@ -16,10 +17,12 @@ error, the chosen finalist, the finalists' fresh-draw costs (m²) and the second
 phase (the table's seconds apart: it is built once per seed). ``--summary JSONL`` prints
 the two tables of BENCHMARKS.md ("Levers on the spread") from such files (several may be
 given; the seeded runs of ``bench_pso.py``'s ``bench_plan.jsonl`` count as the default
-settings): the runs per setting, and how much σ varies from seed to seed.
+settings): the runs per setting, and how much σ varies from seed to seed. Runs of other
+seeds, and runs marked ``"refinement": "joint"`` (``fine_optima`` layouts refined on one
+shared grown table, as the plan did before it refined each on its own), are grouped apart.
 
 Run: python benchmarks/bench_search_levers.py [--search '{"evaluations": 9000}']
-     [--anchors 4 6 8 10] [--seeds 5] [--table-seed T] [--workers 2]
+     [--anchors 4 6 8 10] [--seeds 5] [--first-seed S] [--table-seed T] [--workers 2]
 """
 
 import json
@@ -72,13 +75,22 @@ def _lines(paths: list[str]):
             yield r
 
 
+def _note(r: dict) -> str:
+    """What sets a run's group apart beyond its settings and table: other seeds, or the
+    joint refinement of an earlier version."""
+    notes = ["joint refinement"] if r.get("refinement") == "joint" else []
+    if r.get("first_seed"):
+        notes.append(f"seeds from {r['first_seed']}")
+    return ", ".join(notes)
+
+
 def summary(paths: list[str]) -> None:
     """Per (search settings, table seed) and M: σ per seed, median, worst, spread, runs
     below Table I on σ and P95, and the mean σ where the tags will be."""
     groups: dict[tuple, list[dict]] = {}
     for r in _lines(paths):
         tseed = -1 if r["table_seed"] is None else r["table_seed"]
-        key = (json.dumps(r["search"], sort_keys=True), tseed, r["M"])
+        key = (json.dumps(r["search"], sort_keys=True), tseed, r["M"], _note(r))
         groups.setdefault(key, []).append(r)
     print(
         "| search | table | M | σ per seed (m) | median | worst | spread | below Table I "
@@ -86,7 +98,9 @@ def summary(paths: list[str]) -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|")
     # the default settings first, then each setting on its own tables before a shared one
-    for (search, tseed, M), rs in sorted(groups.items(), key=lambda g: (g[0][0] != "{}", g[0])):
+    for (search, tseed, M, note), rs in sorted(
+        groups.items(), key=lambda g: (g[0][0] != "{}" or g[0][3] != "", g[0])
+    ):
         rs = sorted(rs, key=lambda r: r["seed"])
         s = [r["std"] for r in rs]
         p = PAPER_TABLE1[M]
@@ -95,7 +109,7 @@ def summary(paths: list[str]) -> None:
             f"{statistics.mean(r[k] for r in rs):.3f}"
             for k in ("held_out_grid_std", "held_out_random_std", "mounting_std")
         )
-        table = "own" if tseed < 0 else f"seed {tseed}"
+        table = ("own" if tseed < 0 else f"seed {tseed}") + (f", {note}" if note else "")
         print(
             f"| `{search}` | {table} | {M} | {', '.join(f'{x:.3f}' for x in s)} "
             f"| {statistics.median(s):.3f} | {max(s):.3f} | {spread(s):.1%} "
@@ -130,13 +144,14 @@ def odds(groups: dict[tuple, list[dict]], target: float = 0.05, seeds: int = 5) 
     )
     print("|---|---|---|---|---|")
     need = target / studentized_range.ppf(0.9, seeds, np.inf)
-    for M in sorted({M for _, _, M in groups}):
+    for M in sorted({k[2] for k in groups}):
         own = {k: [r["std"] for r in rs] for k, rs in groups.items() if k[2] == M and k[1] < 0}
         runs = [s for s in own.values() if len(s) > 1]
         if not runs:
             continue
         pooled = _sd(runs)
-        base = _sd([own[("{}", -1, M)]]) if len(own.get(("{}", -1, M), ())) > 1 else None
+        default = own.get(("{}", -1, M, ""), [])
+        base = _sd([default]) if len(default) > 1 else None
         b, cb = ("—", "—") if base is None else (f"{base:.2%}", f"{chance(base):.2f}")
         print(
             f"| {M} | {b} | {len(runs)}, {sum(map(len, runs))}, {pooled:.2%} "
@@ -148,6 +163,7 @@ def main() -> None:
     ap = runs_parser(__doc__, anchors=[4, 6, 8, 10])
     ap.add_argument("--search", default="{}", help="SearchOptions fields as a JSON object")
     ap.add_argument("--table-seed", type=int, help="every run searches this seed's table")
+    ap.add_argument("--first-seed", type=int, default=0, help="the first seed to run")
     args = ap.parse_args()
     if args.summary:
         summary(args.summary)
@@ -157,7 +173,7 @@ def main() -> None:
     room = Room.techtile()
     with WorkerPool(max_workers=args.workers) as ex:
         table = None
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             tseed = seed if args.table_seed is None else args.table_seed
             if table is None or args.table_seed is None:
                 t0 = time.perf_counter()
@@ -167,7 +183,7 @@ def main() -> None:
                 r = run(room, M, seed, table, options, ex, args.workers)
                 emit(
                     "search_levers", search=fields, table_seed=args.table_seed,
-                    table_seconds=table_seconds, **r,
+                    first_seed=args.first_seed, table_seconds=table_seconds, **r,
                 )  # fmt: skip
 
 

@@ -814,8 +814,8 @@ def _run_swarm(room: Room, run: dict, seed_layouts, clock: _Clock) -> PSOResult:
 
 
 def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
-    """The best ``fine_optima`` distinct layouts of the swarm (seeds included) refined on
-    finer lattices of the range table (:func:`placement.simselect.refine_on_table`);
+    """The best ``fine_optima`` distinct layouts of the swarm (seeds included), each refined
+    on finer lattices of the range table (:func:`placement.simselect.refine_on_table`);
     [(name, anchors)]. Simulated costs with fine spacings only."""
     opt = run["search"]
     if not (run["simulated"] and res.success and opt.fine_spacings and run.get("searched")):
@@ -824,21 +824,27 @@ def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
 
     starts = [res.pbest[i] for i in best_distinct(res, opt.fine_optima)]
     bar = _Bar(run["progress"], "refinement")
-    bar.update(0, 1)
-    out, table, nfev = refine_on_table(
-        room,
-        _table(room, run),
-        starts,
-        statistic=run["cost"],
-        options=opt,
-        rng=stream(run["entropy"], "refinement"),
-        executor=run["executor"],
-        workers=run["workers"],
-    )
-    bar.update(1, 1)
+    bar.update(0, len(starts))
+    out, nfev = [], 0
+    for k, start in enumerate(starts):
+        # each on the table grown by its own lattices: another layout's columns would
+        # change its descent (docs/model.md, "Refinement after the swarm")
+        refined, _, n = refine_on_table(
+            room,
+            _table(room, run),
+            [start],
+            statistic=run["cost"],
+            options=opt,
+            rng=stream(run["entropy"], "refinement"),
+            executor=run["executor"],
+            workers=run["workers"],
+        )
+        nfev += n
+        out += [(f"refined-{k + 1}", a) for a, f, _ in refined if math.isfinite(f)]
+        bar.update(k + 1, len(starts))
     bar.close()
     clock.lap("refinement", nfev)
-    return [(f"refined-{k + 1}", a) for k, (a, f, _) in enumerate(out) if math.isfinite(f)]
+    return out
 
 
 def _choose(room: Room, run: dict, res: PSOResult, seed_layouts, refined, clock: _Clock):

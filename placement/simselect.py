@@ -222,7 +222,8 @@ class SearchOptions:
     fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off).
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
     fine_neighbours : the swap neighbourhood of the descents on a grown table.
-    fine_optima : optima that get fine columns and descend on the grown table.
+    fine_optima : the swarm's best distinct layouts that a plan refines on the fine lattices,
+        each on the table grown by its own columns.
     keep : distinct optima returned as seeds.
     precision : the receiver DSP's precision for the table.
     """

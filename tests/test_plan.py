@@ -135,6 +135,19 @@ def test_options_are_honoured_and_clashes_refused():
         _plan(particles=5, options=placement.PSOOptions(4, 2))
 
 
+def test_each_refined_layout_is_refined_on_its_own_columns():
+    """With two layouts refined, the first is what refining it alone gives."""
+
+    def refined(res):
+        return {f["source"]: f["anchors"] for f in res.finalists if f["source"].startswith("ref")}
+
+    one = refined(_plan(iterations=1))
+    two = refined(_plan(search={**SMALL.__dict__, "fine_optima": 2}, iterations=1))
+    assert sorted(one) == ["refined-1"] and sorted(two) == ["refined-1", "refined-2"]
+    np.testing.assert_array_equal(one["refined-1"], two["refined-1"])
+    assert not np.array_equal(two["refined-1"], two["refined-2"])
+
+
 def test_the_mounting_tolerance_reaches_every_stage_and_clashes_are_refused():
     res = _plan(search={**SMALL.__dict__, "mount_tolerance": 0.0}, iterations=1)
     assert res.settings["search"]["mount_tolerance"] == 0.0 == res.settings["mount_tolerance"]
