@@ -564,7 +564,8 @@ def seed_then_pso(
     table=None,
     seed=checks.UNSET,
 ) -> PlacementResult:
-    """Plan M anchors: range-table search → swarm → finalists → validation (module doc).
+    """Plan M anchors: range-table search → swarm → refinement → finalists → validation
+    (module doc).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     cost : "variance" (the paper's), "mean", "p95" or "rms" of the simulated Euclidean
