@@ -5,7 +5,8 @@ records:
 - the validated σ / mean / P95 (m) at the 270 nodes (R = 100, the run's own validation
   noise), at held-out nodes (a 10 × 7 × 6 grid and 300 random points) and under mounting
   error (3 cm, 10 draws);
-- the seconds and cost evaluations of every phase (search, swarm, refinement, finalists, validation);
+- the seconds and cost evaluations of every phase (search, swarm, refinement, finalists,
+  validation);
 - the best seed (the lowest swarm cost at the swarm's first iteration) validated on the
   same draws as the chosen layout: the swarm improved on its seeds when the chosen layout's
   σ is below the best seed's;
