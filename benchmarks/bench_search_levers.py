@@ -97,9 +97,10 @@ def summary(paths: list[str]) -> None:
         "| mean σ: held-out grid / random points / mounting error (m) |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
-    # the default settings first, then each setting on its own tables before a shared one
+    # the default settings first, then each setting: on its own tables (the benchmark's
+    # seeds, then others) before a shared one
     for (search, tseed, M, note), rs in sorted(
-        groups.items(), key=lambda g: (g[0][0] != "{}" or g[0][3] != "", g[0])
+        groups.items(), key=lambda g: (g[0][0] != "{}", g[0][0], g[0][1] >= 0, g[0][3], g[0])
     ):
         rs = sorted(rs, key=lambda r: r["seed"])
         s = [r["std"] for r in rs]
