@@ -42,6 +42,7 @@ import placement
 from analysis import figures
 from placement.plan import seed_then_pso
 from placement.pso import PSOOptions, pso
+from placement.rangetable import range_table
 from simulation import Room, evaluate_layout, locate, simulate_ranges
 from simulation.multipath import image_indices
 from simulation.noise import noise_sigma
@@ -223,6 +224,19 @@ def _plan_cases() -> None:
             f"seed_then_pso({arg}={v!r})",
             arg,
             lambda kw=kw: seed_then_pso(ROOM, **{"M": 4, **kw}),
+            group="plan",
+        )
+    # a mounting tolerance that contradicts the search's or the given table's
+    for label, extra in (
+        ("search=SearchOptions()", lambda: {"search": placement.SearchOptions()}),
+        ("search={'mount_tolerance': 0.03}", lambda: {"search": {"mount_tolerance": 0.03}}),
+        ("table=<built with 0>", lambda: {"table": range_table(ROOM, A, NODES, rng=0)}),
+    ):
+        api(
+            "options",
+            f"seed_then_pso(mount_tolerance=0.05, {label})",
+            "mount_tolerance" if "search" in label else "table",
+            lambda extra=extra: seed_then_pso(ROOM, 4, **PLAN_KW, mount_tolerance=0.05, **extra()),
             group="plan",
         )
 
@@ -782,7 +796,7 @@ def _second_sweep_cases() -> None:
 def _empty_input_cases() -> None:
     """Empty and degenerate input to the range-table search and its neighbours (a third
     sweep): refused with the argument's name, or an empty result of the matching shape."""
-    from placement.rangetable import range_table, table_costs
+    from placement.rangetable import table_costs
     from placement.simselect import SearchOptions, refine_on_table, simulated_select
     from placement.validation import validate_layout
     from simulation.evaluation import RangingScene
