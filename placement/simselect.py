@@ -548,7 +548,7 @@ class SimulatedSelection(LayoutResult):
         return np.stack([self.candidates[S] for S, _ in self.optima[:k]])
 
     def to_dict(self) -> dict[str, Any]:
-        """The selection as plain JSON types (the table itself left out)."""
+        """The selection as plain JSON types (the candidates and the table left out)."""
         return {
             "anchors": self.anchors.tolist(),
             "indices": self.indices.tolist(),
