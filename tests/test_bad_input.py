@@ -96,7 +96,11 @@ def test_pso_options_counts(field, v):
         (lambda: ROOM.grid((1.5, 2, 2)), "shape"),
         (lambda: image_indices(True), "max_order"),
         (lambda: pso(lambda a, r: 1.0, ROOM, 4.5, options=FAST), "M"),
-        (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, seed=1.7), "seed"),
+        pytest.param(
+            lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, seed=1.7),
+            "seed",
+            marks=pytest.mark.filterwarnings("ignore:pso\\(seed=...\\) is deprecated"),
+        ),
         (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, chunksize=True), "chunksize"),
         (lambda: Receiver(window=True), "window"),
     ],
