@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import peb
+from placement.rangetable import check_mount_tolerance, range_table, table_errors
 from simulation import checks
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
@@ -92,8 +93,6 @@ class DrawsCost:
         nodes = checks.reals("nodes", self.nodes, shape=(None, None, 3))
         room.check_nodes(nodes.reshape(-1, 3))
         checks.count("exact_draws", self.exact_draws, low=0, high=nodes.shape[0])
-        from placement.rangetable import check_mount_tolerance
-
         check_mount_tolerance(self.mount_tolerance)
 
     @property
@@ -103,8 +102,6 @@ class DrawsCost:
 
     def errors(self, anchors) -> np.ndarray:
         """(D · P,) Euclidean position errors (m) of the layout over every draw and node."""
-        from placement.rangetable import range_table, table_errors
-
         a = np.asarray(anchors, dtype=float)
         table = range_table(
             self.room,

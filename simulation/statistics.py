@@ -112,11 +112,10 @@ _REDUCTIONS: dict[str, Callable[..., np.ndarray]] = {
 
 
 def _strict(name: str) -> Callable[[np.ndarray], float]:
-    reduce = _REDUCTIONS[name]
+    """The statistic ``name`` of all errors: the one-row case of :func:`row_statistics`."""
 
     def stat(errors) -> float:
-        e = np.asarray(errors, dtype=float)
-        return float(reduce(e)) if e.size and np.all(np.isfinite(e)) else math.inf
+        return float(row_statistics(name, np.asarray(errors, dtype=float).reshape(1, -1))[0])
 
     return stat
 
