@@ -116,9 +116,7 @@ class DrawsCost:
         return table_errors(table, np.arange(len(a))[None])[0]
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
-        from simulation.checks import anchor_rank
-
-        if anchor_rank(anchors) < 2:  # collinear: the position is not determined
+        if checks.anchor_rank(anchors) < 2:  # collinear: the position is not determined
             return math.inf
         return SIMULATED_STATISTICS[self.statistic](self.errors(anchors))
 
