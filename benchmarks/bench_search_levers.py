@@ -156,7 +156,9 @@ def odds(groups: dict[tuple, list[dict]], target: float = 0.05, seeds: int = 5) 
         own = {
             k: [r["std"] for r in rs]
             for k, rs in groups.items()
-            if k[2] == M and k[1] < 0 and "cost" not in k[3]  # σ of the paper's cost only
+            if k[2] == M
+            and k[1] < 0
+            and all(r.get("cost", "variance") == "variance" for r in rs)  # the paper's cost
         }
         runs = [s for s in own.values() if len(s) > 1]
         if not runs:

@@ -139,7 +139,8 @@ def _search_options(args):
 def _check_args(args, room):
     """Every number and file of the command, checked before any work; returns the
     search settings."""
-    from placement.pso import MAX_ITERATIONS, MAX_PARTICLES, load_checkpoint
+    from placement.plan import LOCAL_SWARM
+    from placement.pso import MAX_ITERATIONS, MAX_PARTICLES, PSOOptions, load_checkpoint
     from placement.rangetable import MAX_MOUNT_TOLERANCE
     from placement.surfaces import MAX_ANCHORS, candidate_grid
     from simulation.evaluation import BYTES_PER_RANGE
@@ -149,9 +150,6 @@ def _check_args(args, room):
     if args.iterations is not None:
         checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
     checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
-    from placement.plan import LOCAL_SWARM
-    from placement.pso import PSOOptions
-
     # the library's swarm: the local one for a simulated cost with seeds, the paper's else
     local = not args.no_seeds and args.cost != "peb"
     particles = args.particles or (LOCAL_SWARM if local else PSOOptions()).particles
