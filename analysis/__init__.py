@@ -4,6 +4,7 @@ Imports only from :mod:`simulation` (never from :mod:`placement`).
 """
 
 from analysis import statistics
+from analysis.coverage import coverage, covered_share, heard, heard_sigma
 from analysis.fim import crlb, crlb_trace, fim, gdop, peb
 from analysis.noise import (
     CalibratedRangeNoise,
@@ -21,11 +22,15 @@ __all__ = [
     "MultipathRangeNoise",
     "PhysicalRangeNoise",
     "calibrated_sigma",
+    "coverage",
+    "covered_share",
     "crlb",
     "crlb_trace",
     "direct_amplitude",
     "fim",
     "gdop",
+    "heard",
+    "heard_sigma",
     "peb",
     *statistics.__all__,
 ]

@@ -37,6 +37,8 @@ from matplotlib.colors import LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from analysis.coverage import coverage as _coverage
+from analysis.coverage import heard_sigma
 from analysis.fim import peb as _peb
 from analysis.statistics import ecdf, error_stats
 from simulation import checks
@@ -261,7 +263,8 @@ def peb_plane(
 
     Returns ``(u, v, values)``: cell-centre coordinates u (nu,), v (nv,) along the two
     other axes in increasing order and PEB values (nu, nv) in metres, +inf where the FIM
-    is singular; ``resolution`` is the cell size in metres and ``sigma`` the range σ (m).
+    is singular; ``resolution`` is the cell size in metres and ``sigma`` the range σ (m),
+    for the anchors each point hears (:func:`analysis.coverage.heard_sigma`).
     """
     if not isinstance(axis, int | str) or isinstance(axis, bool) or axis not in (0, 1, 2, *_AXES):
         raise ValueError(f"axis: must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
@@ -283,7 +286,8 @@ def peb_plane(
     pts[..., k] = value
     pts[..., iu] = u[:, None]
     pts[..., iv] = v[None, :]
-    vals = _peb(anchors, pts.reshape(-1, 3), sigma=sigma).reshape(nu, nv)
+    flat = pts.reshape(-1, 3)
+    vals = _peb(anchors, flat, sigma=heard_sigma(room, anchors, flat, sigma)).reshape(nu, nv)
     return u, v, vals
 
 
@@ -365,6 +369,71 @@ def peb_map(
         if finite.size < allvals.size:
             title += "   (grey: singular, PEB = ∞)"
     fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def coverage_map(
+    room: Room,
+    anchors,
+    *,
+    heights: Sequence[float] | None = None,
+    resolution: float = 0.1,
+    anchor_color: str = ANCHOR_COLOR,
+    dpi: float = 100,
+) -> Figure:
+    """Coverage: the number of anchors heard (:func:`analysis.coverage.coverage`) on
+    horizontal slices at ``heights`` (default: the room's mid height), one discrete colour
+    per count; red hatching where fewer than 4 are heard (no position fix); anchors
+    numbered as the rows of ``anchors`` (M, 3), keep-outs and tag zones as in
+    :func:`peb_map`."""
+    import matplotlib.colors as mcolors
+
+    room = as_room(room)
+    anchors = _as_points(anchors, "anchors")
+    resolution = checks.real("resolution", resolution, low=0.0, low_open=True, unit="m")
+    heights = (room.size[2] / 2,) if heights is None else tuple(float(z) for z in heights)
+    if not heights:
+        raise ValueError("heights: at least one height is required")
+    L, M = room.size, len(anchors)
+    nu, nv = (max(2, math.ceil(L[i] / resolution)) for i in (0, 1))
+    if nu * nv * len(heights) * M > 50_000_000:
+        raise ValueError(f"resolution: {resolution:g} m gives too many cells; use a coarser one")
+    u = (np.arange(nu) + 0.5) * (L[0] / nu)
+    v = (np.arange(nv) + 0.5) * (L[1] / nv)
+    n = len(heights)
+    ncols = 1 if n == 1 else 2 if n <= 4 else 3
+    nrows = math.ceil(n / ncols)
+    fig = new_figure((5.2 * ncols + 1.2, 3.0 * nrows + 0.8) if n > 1 else (7.0, 4.2), dpi)
+    axs = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    cmap = matplotlib.colormaps["viridis"].resampled(M + 1)
+    norm = mcolors.BoundaryNorm(np.arange(-0.5, M + 1.5), M + 1)
+    im = None
+    short = 0.0
+    for ax, z in zip(axs, heights, strict=False):
+        pts = np.stack(np.meshgrid(u, v, [z], indexing="ij"), axis=-1).reshape(-1, 3)
+        count = _coverage(room, anchors, pts).reshape(nu, nv)
+        short = max(short, float(np.mean(count < 4)))
+        extent = (0.0, L[0], 0.0, L[1])
+        im = ax.imshow(count.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
+                       interpolation="nearest", aspect="equal")  # fmt: skip
+        if np.any(count < 4):
+            ax.contourf(u, v, (count < 4).T.astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=["////"])  # fmt: skip
+            ax.contour(u, v, (count < 4).T.astype(float), levels=[0.5], colors="red",
+                       linewidths=1.0)  # fmt: skip
+        _draw_regions2d(ax, room, 0, 1)
+        _numbered_anchors2d(ax, anchors, 0, 1, anchor_color, edge="white")
+        ax.set_xlim(0, L[0])
+        ax.set_ylim(0, L[1])
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(f"z = {z:.2f} m", fontsize=10, pad=14)
+    for ax in axs[n:]:
+        ax.set_visible(False)
+    cb = fig.colorbar(im, ax=list(axs[:n]), shrink=0.9, ticks=range(M + 1))
+    cb.set_label("anchors heard")
+    note = f"; red hatching: fewer than 4 ({100 * short:.1f} % of a slice at most)" if short else ""
+    fig.suptitle(f"Coverage: anchors heard (reach {room.reach:.2f} m), M = {M}{note}", fontsize=11)
     return fig
 
 

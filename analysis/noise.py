@@ -18,10 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simulation import checks
-from simulation.chirp import Chirp
 from simulation.directivity import aim_vectors, cardioid
 from simulation.noise import check_snr
-from simulation.receiver import Receiver, signal_chain
 from simulation.room import Room, as_room
 
 #: accepted constant range σ (m)
@@ -60,7 +58,7 @@ def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
     aim = aim_vectors(a, room.centroid)[..., None, :, :]  # (..., 1, M, 3)
     with np.errstate(divide="ignore", invalid="ignore"):
         cos = np.where(d > 0, np.sum(diff * aim, axis=-1) / np.where(d > 0, d, 1.0), 1.0)
-        amp = cardioid(cos) * np.exp(-0.5 * room.air_absorption * d) / (4 * np.pi * d)
+        amp = cardioid(cos) * np.exp(-0.5 * room.air_reference * d) / (4 * np.pi * d)
     return np.where(d > 0, amp, np.inf)
 
 
@@ -84,14 +82,16 @@ class PhysicalRangeNoise:
     This is the coherent (carrier-phase) bound: it assumes the right carrier peak is
     found, so it is far below what the envelope-and-snap receiver achieves in a
     reverberant room (millimetres, against centimetres to metres); use it to see the
-    geometry of the SNR, and a calibrated σ to compare with simulation. σ = inf where
-    the window misses the chirp.
+    geometry of the SNR, and a calibrated σ to compare with simulation.
+
+    σ = inf (no information from that anchor, as the receiver reports no range) where the
+    anchor is not heard (:meth:`heard`): the direct path lies beyond the signal's reach or
+    within its near limit, or, for a receiver with a detection threshold η, its expected
+    correlation peak A_j(p)·‖g_k‖² stays below η·σ_w,j·‖g_k‖ (:mod:`simulation.receiver`).
     """
 
     room: Room = field(default_factory=Room.techtile)
     snr_db: float = 30.0
-    chirp: Chirp = field(default_factory=Chirp)
-    receiver: Receiver = field(default_factory=Receiver)
     grid_shape: tuple[int, int, int] = (9, 6, 5)
 
     def __post_init__(self) -> None:
@@ -99,9 +99,19 @@ class PhysicalRangeNoise:
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
         object.__setattr__(self, "grid_shape", checks.grid_shape("grid_shape", self.grid_shape))
-        chirp, receiver = signal_chain(self.chirp, self.receiver)  # None: the defaults
-        object.__setattr__(self, "chirp", chirp)
-        object.__setattr__(self, "receiver", receiver)
+
+    @property
+    def signal(self):
+        """The room's chirp and receiver (:class:`simulation.Signal`)."""
+        return self.room.signal
+
+    @property
+    def chirp(self):
+        return self.room.signal.chirp
+
+    @property
+    def receiver(self):
+        return self.room.signal.receiver
 
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""
@@ -133,8 +143,31 @@ class PhysicalRangeNoise:
         S2 = np.where(cnt > 0, s2(hi) - s2(lo - 1), 0.0)
         return cnt * alpha**2 + 2 * alpha * beta * S1 + beta**2 * S2
 
+    def heard(self, anchors, positions) -> np.ndarray:
+        """(..., P, M) bool: the receiver reports a range of anchor j at node p (class
+        docstring): the direct path within the signal's reach and, with a detection
+        threshold, its expected correlation peak above it."""
+        a = np.asarray(anchors, dtype=float)
+        p = np.asarray(positions, dtype=float)
+        d = np.linalg.norm(p[:, None, :] - a[..., None, :, :], axis=-1)
+        c = self.room.speed_of_sound
+        lo, hi = self.signal.delays
+        out = (d / c >= lo) & (d / c <= hi)
+        rx = self.receiver
+        if rx.false_alarm is not None:
+            from simulation.receiver import dsp_for
+
+            dsp = dsp_for(self.chirp, rx)
+            k = np.clip(np.rint(rx.index_from_range(d, c)), 0, dsp.n_corr - 1).astype(int)
+            gain = dsp.noise_gain[k]
+            noise = self.reference_amplitude(a)[..., None, :] / np.sqrt(2.0)
+            noise = noise / np.sqrt(10.0 ** (self.snr_db / 10.0))  # σ_w of the SNR rule
+            amp = direct_amplitude(self.room, a, p)
+            out &= amp * gain > dsp.threshold * noise
+        return out
+
     def sigma(self, anchors, positions) -> np.ndarray:
-        """σ_j(p) in metres, (..., P, M)."""
+        """σ_j(p) in metres, (..., P, M); inf where the anchor is not :meth:`heard`."""
         a = np.asarray(anchors, dtype=float)
         p = np.asarray(positions, dtype=float)
         c = self.room.speed_of_sound
@@ -145,7 +178,7 @@ class PhysicalRangeNoise:
         snr = 10.0 ** (self.snr_db / 10.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             s = c / (2 * np.pi) * (ref / amp) / np.sqrt(snr * f2)
-        return np.where(np.isfinite(s) & (f2 > 0), s, np.inf)
+        return np.where(np.isfinite(s) & (f2 > 0) & self.heard(a, p), s, np.inf)
 
 
 # -- calibrated from simulated range errors (paper §V-A) ----------------------------------

@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.coverage import heard_sigma
 from analysis.fim import peb
 from analysis.report_data import (
     DEFAULT_SIGMA,
@@ -101,12 +102,20 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
 
 
 def _check_failures(ctx: Context) -> None:
+    reach = ((ctx.result or {}).get("settings") or {}).get("reach") or {}
+    if reach.get("exceeded"):
+        ctx.notes.append(
+            f"The room is larger than the signal's reach ({reach['reach_m']:.2f} m; mounting "
+            f"points lie up to {reach['farthest_m']:.1f} m from the nodes): anchors farther "
+            "than the reach give no range (see the coverage figure)."
+        )
     for e in ctx.layouts:
         bad = e.sim.stats.get("n_invalid", 0) if e.sim is not None else 0
         if bad:
+            share = e.sim.stats.get("availability", math.nan)
             ctx.notes.append(
-                f"{e.name}: {bad} position fix(es) failed (non-finite error); σ, mean, P95 "
-                "and RMS are over the other errors."
+                f"{e.name}: {bad} node realization(s) without a position fix "
+                f"(availability {100 * share:.2f} %); σ, mean, P95 and RMS are over the fixes."
             )
 
 
@@ -169,7 +178,7 @@ def _context(result_dir, sigma, realizations: int, comparisons) -> Context:
         raise ValueError(f"sigma: must be > 0 m, got {sigma}")
     layouts = collect_layouts(data, room, nodes, comparisons)
     for e in layouts:
-        e.peb = peb(e.anchors, nodes, sigma=sigma)
+        e.peb = peb(e.anchors, nodes, sigma=heard_sigma(room, e.anchors, nodes, sigma))
     colors = layout_colors([e.name for e in layouts])
     return Context(
         Path(result_dir), data, room, nodes, sigma, layouts, colors, [], [], realizations

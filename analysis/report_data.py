@@ -172,15 +172,22 @@ def json_array(x, name: str, ndim: int | None = None) -> np.ndarray:
 
 
 def _stats_from(src: dict | None, errors: np.ndarray | None) -> dict[str, float]:
-    """The stored statistics when the block has them all, else those of the errors."""
+    """The stored statistics when the block has them all, else those of the errors; with
+    ``n_invalid`` and the ``availability`` (the share of realizations with a fix)."""
     computed = error_stats(errors) if errors is not None else None
     if src and all(isinstance(src.get(k), int | float) for k in SHOWN_STATS):
         out = {k: float(src[k]) for k in SHOWN_STATS}
         out["n_invalid"] = int(src.get("n_invalid") or 0)
+        stored = src.get("availability")
+        out["availability"] = (
+            float(stored)
+            if isinstance(stored, int | float)
+            else (computed["availability"] if computed is not None else math.nan)
+        )
         return out
     if computed is not None:
-        return {k: computed[k] for k in (*SHOWN_STATS, "n_invalid")}
-    return {**dict.fromkeys(SHOWN_STATS, math.nan), "n_invalid": 0}
+        return {k: computed[k] for k in (*SHOWN_STATS, "n_invalid", "availability")}
+    return {**dict.fromkeys(SHOWN_STATS, math.nan), "n_invalid": 0, "availability": math.nan}
 
 
 def _per_node(per_node: dict, key: str, source: str, P: int) -> np.ndarray | None:

@@ -40,6 +40,7 @@ def make_figures(ctx: Context, dpi: float) -> list[Figure]:
     simulated errors, the DOP map, the layouts and the PSO evolution."""
     figs = _Figures(ctx, dpi)
     _plan(figs)
+    _coverage(figs)
     _peb(figs)
     if any(e.sim is not None for e in ctx.layouts):
         _simulated(figs)
@@ -67,6 +68,25 @@ def _plan(figs: _Figures) -> None:
         lambda: F.plan_view(ctx.room, best.anchors, color=ctx.colors[best.name], dpi=figs.dpi),
         section="layout",
     )
+
+
+def _coverage(figs: _Figures) -> None:
+    ctx, best, nodes = figs.ctx, figs.ctx.best, figs.ctx.nodes
+    zs = np.unique(np.round(nodes[:, 2], 9))
+    heights = sorted({float(zs[0]), float(zs[len(zs) // 2]), float(zs[-1])})
+    figs.add(
+        f"Coverage of the {best.name} layout",
+        "The number of anchors each point hears (within the signal's reach"
+        + (" and above the receiver's detection threshold" if ctx.room.signal.receiver.false_alarm
+           is not None else "")
+        + f", reach {ctx.room.reach:.2f} m) on horizontal slices at the node heights; a "
+        "position needs 4. Red hatching: fewer than 4 heard, no fix." + _regions_note(ctx),
+        lambda: F.coverage_map(
+            ctx.room, best.anchors, heights=heights, anchor_color=ctx.colors[best.name],
+            dpi=figs.dpi,
+        ),
+        section="layout",
+    )  # fmt: skip
 
 
 def _peb(figs: _Figures) -> None:

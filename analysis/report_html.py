@@ -79,6 +79,13 @@ def _num(x: Any, digits: int = 3) -> str:
     return f"{v:.{digits}f}" if abs(v) < 1e4 else f"{v:.{digits}g}"
 
 
+def _percent(x: Any) -> str:
+    """A share as a percentage ("–" when unknown)."""
+    if x is None or not isinstance(x, int | float) or math.isnan(x):
+        return "–"
+    return "100 %" if x >= 1 else f"{100 * x:.2f} %"
+
+
 def _table(header: list[str], rows: list[list[str]], left: int = 1, cls: str = "") -> str:
     """HTML table; cells are already-escaped HTML; the first ``left`` columns align left."""
     th = "".join(
@@ -192,6 +199,7 @@ def _headline(ctx: Context) -> list[str]:
             (f"{_num(st['std'])} m", f"σ of the error ({best.name})"),
             (f"{_num(st['mean'])} m", "mean error"),
             (f"{_num(st['p95'])} m", "P95 error"),
+            (_percent(st.get("availability")), "availability (share with a fix)"),
         ]
     cards.append((f"{_num(_summary(best.peb)['mean'])} m", "mean PEB"))
     for e in ctx.layouts[1:]:
@@ -245,6 +253,7 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
                 _e(s.source if s else "not simulated"),
                 str(s.realizations) if s else "–",
                 *(_num(s.stats[k]) if s else "–" for k in ("std", "mean", "p95", "rms")),
+                _percent(s.stats.get("availability")) if s else "–",
                 _mean_finite(s.dop if s else None),
                 _mean_finite(s.dop_rms if s else None),
                 _num(pb["mean"]),
@@ -258,15 +267,17 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
 def _comparison_section(ctx: Context) -> list[str]:
     header = [
         "layout", "M", "simulated errors from", "R", "σ (m)", "mean (m)", "P95 (m)",
-        "RMS (m)", "mean DOP (paper: σ/σ<sub>r</sub>)", "mean DOP<sub>RMS</sub> "
+        "RMS (m)", "availability", "mean DOP (paper: σ/σ<sub>r</sub>)", "mean DOP<sub>RMS</sub> "
         "(RMSE/σ<sub>r</sub>)", "mean PEB (m)", "P95 PEB (m)", "cost",
     ]  # fmt: skip
     naive = any(e.role == "comparison" for e in ctx.layouts)
     parts = [
         "<h2>Comparison: position error, DOP and bound</h2>",
         _table(header, _comparison_rows(ctx), left=1),
-        '<p class="sub">Euclidean position errors over all nodes and realizations; σ is the '
-        "population standard deviation (the paper's figure of merit). "
+        '<p class="sub">Euclidean position errors over the fixes of all nodes and '
+        "realizations; σ is the population standard deviation (the paper's figure of "
+        "merit); availability: the share of node realizations with a fix (4 or more "
+        "anchors heard). "
         + ("" if naive else "No naive comparison layout was given (anchorplan report adds "
            "one: anchors spread evenly along the top edges of the mounting walls). ")
         + "DOP per node, averaged over the nodes with finite DOP: the paper's DOP is the "
@@ -339,7 +350,9 @@ def _gap_section(ctx: Context) -> list[str]:
 
 
 def _stat_cells(block: dict) -> list[str]:
-    return [_num(block.get(k)) for k in ("std", "mean", "p95")]
+    return [_num(block.get(k)) for k in ("std", "mean", "p95")] + [
+        _percent(block.get("availability"))
+    ]
 
 
 def _held_out(v: dict, nominal: list[str], P: int) -> list[str]:
@@ -352,7 +365,7 @@ def _held_out(v: dict, nominal: list[str], P: int) -> list[str]:
         rows.append([_e(name), _e(block.get("nodes", "–")), *_stat_cells(block)])
     return [
         "<h3>Held-out nodes</h3>",
-        _table(["nodes", "count", "σ (m)", "mean (m)", "P95 (m)"], rows, left=1),
+        _table(["nodes", "count", "σ (m)", "mean (m)", "P95 (m)", "availability"], rows, left=1),
         '<p class="sub">The chosen layout simulated at nodes the optimizer did not use '
         "(grid: another grid of nodes; random: random points in the room), against the "
         "validation on the evaluation grid.</p>",
@@ -369,7 +382,10 @@ def _mounting(v: dict, nominal: list[str]) -> list[str]:
     ]
     return [
         "<h3>Mounting tolerance</h3>",
-        _table(["anchors", "tolerance (m)", "draws", "σ (m)", "mean (m)", "P95 (m)"], rows),
+        _table(
+            ["anchors", "tolerance (m)", "draws", "σ (m)", "mean (m)", "P95 (m)", "availability"],
+            rows,
+        ),
         '<p class="sub">The layout with every anchor moved at random by up to the tolerance '
         "on its surface, as an installer might mount it, over the given number of draws.</p>",
     ]
@@ -426,6 +442,23 @@ def _regions(ctx: Context, room_dict: dict) -> list[str]:
     ]
 
 
+def _signal(room: Room) -> list[str]:
+    """The chirp, the receiver and the reach they imply."""
+    sig = room.signal
+    d = {f"chirp {k}": v for k, v in sig.chirp.__dict__.items()}
+    d.update({f"receiver {k}": v for k, v in sig.receiver.__dict__.items()})
+    d["reach (m)"] = round(room.reach, 3)
+    d["near limit (m)"] = round(room.near_limit, 3)
+    return [
+        "<h3>Signal</h3>",
+        '<p class="sub">The transmitted chirp and the receiver (durations in s, frequencies '
+        "in Hz, window in samples). The reach is the longest range whose chirp the window "
+        "holds; a receiver without a false-alarm setting has no detection threshold (the "
+        "paper's).</p>",
+        _kv(d),
+    ]
+
+
 def _timings(timings) -> list[str]:
     """The plan's time per phase (a dict phase → seconds)."""
     if not isinstance(timings, dict) or not timings:
@@ -441,9 +474,11 @@ def _settings_section(ctx: Context) -> list[str]:
     room, result, evaluation = ctx.room, ctx.result, ctx.evaluation
     room_dict = room.to_dict()
     regions = _regions(ctx, room_dict)  # takes the boxes out of room_dict
+    room_dict.pop("signal", None)
     parts = ["<h2>Settings</h2>", "<h3>Room</h3>"]
     parts.append(_kv({**room_dict, "speed_of_sound (m/s)": round(room.speed_of_sound, 3)}))
     parts += regions
+    parts += _signal(room)
     if result is not None:
         keys = ("cost_name", "cost", "nfev", "nit", "success", "message")
         run = {k: result[k] for k in keys if k in result}

@@ -17,22 +17,27 @@ def _num(v) -> str:
     return "–" if v is None else f"{v:.3f}"
 
 
+def _share(v) -> str:
+    return "–" if v is None or v != v else f"{100 * v:.2f} %"
+
+
 def sweep_html(data: dict, dpi: float = 100) -> str:
     """The report of a sweep's ``to_dict()`` (as read back from ``sweep.json``)."""
     rows = data["rows"]
     paper = TABLE1 if data.get("room", {}).get("name") == "techtile" else None
     png = png_bytes(sweep_curves(rows, data.get("target_p95"), paper, dpi=dpi), palette=True)
     target = data.get("target_p95")
-    if target is None:
-        verdict = "No target P95 was given, so no anchor count is recommended."
-    elif data.get("recommended") is None:
-        verdict = f"No anchor count of the sweep meets P95 ≤ {target:g} m."
+    goal = f"availability ≥ {100 * data.get('target_availability', 0.99):g} %"
+    if target is not None:
+        goal += f" and P95 ≤ {target:g} m"
+    if data.get("recommended") is None:
+        verdict = f"No anchor count of the sweep reaches {goal}."
     else:
         verdict = (
             f"<b>Recommended: M = {data['recommended']}</b>, the smallest anchor count whose "
-            f"validated P95 is at most {target:g} m."
+            f"validated {goal}."
         )
-    head = "<tr><th>M</th><th>σ (m)</th><th>mean (m)</th><th>P95 (m)</th>"
+    head = "<tr><th>M</th><th>σ (m)</th><th>mean (m)</th><th>P95 (m)</th><th>availability</th>"
     head += "<th>held-out σ (m)</th><th>mounting-error σ (m)</th><th>seconds</th>"
     head += "<th>paper σ / mean / P95 (m)</th></tr>" if paper else "</tr>"
     body = []
@@ -43,7 +48,8 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
             ref = f"<td>{p['std']} / {p['mean']} / {p['p95']}</td>" if p else "<td>–</td>"
         body.append(
             f"<tr><td>{r['M']}</td><td>{_num(r['std'])}</td><td>{_num(r['mean'])}</td>"
-            f"<td>{_num(r['p95'])}</td><td>{_num(r['held_out_std'])}</td>"
+            f"<td>{_num(r['p95'])}</td><td>{_share(r.get('availability'))}</td>"
+            f"<td>{_num(r['held_out_std'])}</td>"
             f"<td>{_num(r['mounting_std'])}</td><td>{r['seconds']:.0f}</td>{ref}</tr>"
         )
     layouts = "".join(
@@ -62,7 +68,8 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
         f"<table>{head}{''.join(body)}</table>"
         f"<p><img alt='errors against M' src='data:image/png;base64,{img}'></p>"
         "<p>σ, mean and P95 of the Euclidean position error at the evaluation nodes (the "
-        "paper's statistics), each layout validated with its own noise; held-out σ at nodes "
+        "paper's statistics, over the fixes), each layout validated with its own noise; "
+        "availability: the share of node realizations with a fix; held-out σ at nodes "
         "the optimizer never scored; mounting-error σ with the anchors mounted within the "
         "run's tolerance of their planned points.</p>"
         f"<h2>Layouts (m)</h2>{layouts}"

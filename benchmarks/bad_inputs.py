@@ -624,10 +624,26 @@ def _signal_physics_cases() -> None:
             "floor",
             lambda v=v: analysis.MultipathRangeNoise(ROOM, floor=v),
         )
-    from simulation import Chirp, Receiver
+    from simulation import Chirp, Receiver, Signal
 
     for arg, v in (("f0", "25e3"), ("f0", -1), ("duration", 100.0), ("duration", 0)):
         api("physics", f"Chirp({arg}={v!r})", arg, lambda a=arg, v=v: Chirp(**{a: v}))
+    # the signal design of rooms bigger than the paper's (issue 26)
+    signal_cases = [
+        ("inverted band", "chirp", dict(chirp=Chirp(f0=45e3, f1=25e3))),
+        ("band above fs/2", "chirp", dict(chirp=Chirp(f1=120e3))),
+        ("window longer than the chirp", "window",
+         dict(chirp=Chirp(duration=0.01), receiver=Receiver(t_wake=0.0, window=4000))),
+        ("a 1 s chirp at 10 MHz (tens of GB of DSP)", "chirp duration x fs x window",
+         dict(chirp=Chirp(duration=1.0, f1=450e3), receiver=Receiver(fs=10e6))),
+    ]  # fmt: skip
+    for label, name, kw in signal_cases:
+        api("physics", f"Signal({label})", name, lambda kw=kw: Signal(**kw))
+    for arg, v in (("false_alarm", 0.0), ("false_alarm", 0.9), ("false_alarm", "x")):
+        api("physics", f"Receiver({arg}={v!r})", arg, lambda a=arg, v=v: Receiver(**{a: v}))
+    for arg, v in (("humidity", 101.0), ("humidity", -5), ("pressure", 0.0),
+                   ("air_absorption", "iso"), ("signal", {"bogus": 1})):  # fmt: skip
+        api("physics", f"Room({arg}={v!r})", arg, lambda a=arg, v=v: Room(**{a: v}))
     for arg, v in (
         ("window", True),
         ("window", 1.5),
@@ -734,7 +750,7 @@ def _wrong_type_cases(tmp: Path) -> None:
 
 def _second_sweep_cases() -> None:
     """Cases a later sweep of the public API found accepted or failing deep inside."""
-    from simulation import Chirp, Receiver
+    from simulation import Chirp, Receiver, Signal
     from simulation.multipath import compute_paths
     from simulation.received import received_windows
 
@@ -760,9 +776,9 @@ def _second_sweep_cases() -> None:
     physics = [
         ("Receiver(window=33)", "window", lambda: Receiver(window=33)),
         ("dsp chirp above fs/2", "chirp",
-         lambda: simulate_ranges(ROOM, A, NODES, chirp=Chirp(f0=1e6, f1=9e5))),
+         lambda: Room(signal=Signal(Chirp(f0=1e6, f1=9e5)))),
         ("high-pass cutoff 1e-9 Hz", "highpass_cutoff",
-         lambda: simulate_ranges(ROOM, A, NODES, receiver=Receiver(highpass_cutoff=1e-9))),
+         lambda: Room(signal=Signal(receiver=Receiver(highpass_cutoff=1e-9)))),
         ("received_windows(speed_of_sound 0)", "speed_of_sound",
          lambda: received_windows(compute_paths(ROOM, A, NODES[:2]), 0.0)),
         ("calibrated_sigma(no errors)", "range_errors",
@@ -783,8 +799,8 @@ def _second_sweep_cases() -> None:
         ("relax_select(solver_opts bogus)", "solver_opts",
          lambda: placement.relax_select(ROOM, 4, spacing=1.6, solver_opts={"bogus": 1})),
         ("compute_paths(images 5)", "images", lambda: compute_paths(ROOM, A, NODES, images=5)),
-        ("evaluate_layout(receiver 'r')", "receiver",
-         lambda: evaluate_layout(ROOM, A, nodes=NODES, receiver="r")),
+        ("Room(signal 'r')", "signal", lambda: Room(signal="r")),
+        ("Signal(receiver 'r')", "receiver", lambda: Signal(receiver="r")),
         ("sweep(on_row 'x')", "on_row",
          lambda: placement.sweep(ROOM, anchors=[4], on_row="x", **PLAN_KW)),
     ]  # fmt: skip
@@ -940,7 +956,10 @@ def build_neighbour_cases() -> None:
                 api("neighbours", f"{fname}({arg}={label})", arg, lambda fn=fn, kw=kw: fn(**kw))
 
 
-PHYSICS_KEYS = {"temperature", "max_order", "size", "sound_speed", "air_absorption"}
+PHYSICS_KEYS = {
+    "temperature", "max_order", "size", "sound_speed", "air_absorption", "humidity",
+    "duration", "chirp", "window",
+}  # fmt: skip
 TOML_CASES = [
     ("empty.toml", "", "empty"),
     ("comment.toml", "# nothing here\n", "empty"),
@@ -966,6 +985,12 @@ TOML_CASES = [
     ("air.toml", 'air_absorption = "x"\n', "air_absorption"),
     ("name.toml", "name = 3\n", "name"),
     ("margin.toml", "node_margin = 3.0\n", "node_margin"),
+    ("humid.toml", 'air_absorption = "iso9613"\nhumidity = 140\n', "humidity"),
+    ("signal.toml", "[signal]\nduration = 0\n", "duration"),
+    ("signal2.toml", "[signal]\nf0 = 50000\nf1 = 30000\n", "chirp"),
+    ("signal3.toml", "[signal]\nwindow = 9000\n", "window"),
+    ("signal4.toml", "[signal]\nchirp = 1\n", "signal"),
+    ("signal5.toml", "signal = 3\n", "signal"),
 ]
 
 
@@ -1047,6 +1072,11 @@ def _cli_number_cases(tmp: Path) -> None:
         ("--workers", ["-1", "100000"]),
         ("--eval-timeout", ["0", "-1", "nan", "inf", "x"]),
         ("--search-spacing", ["0", "-1", "nan", "1e-4"]),
+        ("--chirp-duration", ["0", "-0.03", "5"]),
+        ("--fs", ["0", "60000"]),
+        ("--t-wake", ["-1"]),
+        ("--window", ["5", "100000"]),
+        ("--false-alarm", ["0", "0.9"]),
         ("--search-starts", ["-1"]),
         ("--search-realizations", ["0", "1000"]),
         ("--cost", ["median"]),

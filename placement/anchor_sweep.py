@@ -2,8 +2,9 @@
 
 ``sweep(room, anchors=range(4, 11), target_p95=1.0)`` runs :func:`placement.seed_then_pso`
 once per M on one shared range table (the table depends on the candidate points and the
-scene draws, not on M), and recommends the smallest M whose validated P95 meets the
-target (docs/model.md, "Anchor-count sweep").
+scene draws, not on M), and recommends the smallest M whose validated availability (the
+share of node realizations with a fix) reaches ``target_availability`` and whose
+validated P95 meets ``target_p95`` (docs/model.md, "Anchor-count sweep").
 """
 
 from __future__ import annotations
@@ -24,9 +25,10 @@ from simulation.room import Room, room_or_default
 
 @dataclass(frozen=True)
 class SweepRow:
-    """One anchor count: M, the validated σ, mean and P95 (m) at the evaluation nodes, the
-    held-out and mounting-error σ / P95 (m, NaN when not validated), the layout (M, 3) and
-    the seconds its plan took."""
+    """One anchor count: M, the validated σ, mean and P95 (m, over the fixes) and the
+    availability at the evaluation nodes, the held-out and mounting-error σ / P95 (m) and
+    availabilities (NaN when not validated), the layout (M, 3) and the seconds its plan
+    took."""
 
     M: int
     std: float
@@ -38,6 +40,9 @@ class SweepRow:
     mounting_p95: float
     anchors: np.ndarray
     seconds: float
+    availability: float = math.nan
+    held_out_availability: float = math.nan
+    mounting_availability: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """The row as plain JSON types (anchors as nested lists)."""
@@ -49,8 +54,9 @@ class SweepRow:
 @dataclass(frozen=True)
 class SweepResult:
     """Result of :func:`sweep`: rows (one per M, increasing), recommended the smallest M
-    whose validated P95 ≤ ``target_p95`` (None without a target or when none does), the
-    room, the settings and the seconds of the shared table and of the whole sweep."""
+    whose validated availability ≥ ``target_availability`` and P95 ≤ ``target_p95`` (when
+    given; None when no M does), the room, the settings and the seconds of the shared
+    table and of the whole sweep."""
 
     rows: tuple[SweepRow, ...]
     recommended: int | None
@@ -58,6 +64,7 @@ class SweepResult:
     room: Room
     settings: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
+    target_availability: float = 0.99
 
     def to_dict(self) -> dict[str, Any]:
         """The sweep as plain JSON types (``kind`` "sweep")."""
@@ -66,6 +73,7 @@ class SweepResult:
             "rows": [r.to_dict() for r in self.rows],
             "recommended": self.recommended,
             "target_p95": self.target_p95,
+            "target_availability": self.target_availability,
             "room": self.room.to_dict(),
             "settings": self.settings,
             "timings": self.timings,
@@ -105,7 +113,19 @@ def _row(M: int, res, seconds: float) -> SweepRow:
         mounting_p95=mount.get("p95", nan),
         anchors=np.asarray(res.anchors),
         seconds=seconds,
+        availability=v.get("availability", nan),
+        held_out_availability=held.get("availability", nan),
+        mounting_availability=mount.get("availability", nan),
     )
+
+
+def recommend(rows, target_p95: float | None, target_availability: float) -> int | None:
+    """The smallest M of ``rows`` whose availability ≥ ``target_availability`` and, with a
+    ``target_p95``, whose P95 ≤ it; None when none does."""
+    for r in rows:
+        if r.availability >= target_availability and (target_p95 is None or r.p95 <= target_p95):
+            return r.M
+    return None
 
 
 def sweep(
@@ -113,12 +133,15 @@ def sweep(
     anchors=range(4, 11),
     *,
     target_p95: float | None = None,
+    target_availability: float = 0.99,
     on_row=None,
     **seed_then_pso_kwargs,
 ) -> SweepResult:
     """Plan each anchor count in ``anchors`` with :func:`placement.seed_then_pso` (its
     keyword arguments pass through; every M uses the same ``rng``) on one shared range
-    table, and recommend the smallest M whose validated P95 (m) ≤ ``target_p95``.
+    table, and recommend the smallest M whose validated availability reaches
+    ``target_availability`` (a share in (0, 1]) and whose validated P95 (m) ≤
+    ``target_p95`` (when given).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     on_row : an optional callable ``on_row(M, row)`` called after each M (``progress``
@@ -134,6 +157,9 @@ def sweep(
         raise ValueError(f"on_row: must be a callable on_row(M, row) or None, got {on_row!r}")
     if target_p95 is not None:
         target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")
+    target_availability = checks.real(
+        "target_availability", target_availability, low=0.0, high=1.0, low_open=True
+    )
     kw = dict(seed_then_pso_kwargs)
     if "table" in kw:
         raise ValueError("table: sweep builds the shared table itself; do not pass one")
@@ -145,11 +171,11 @@ def sweep(
         kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
         and kw.get("seeds", "auto") == "auto"
     ):
-        n = len(candidate_grid(room, search.spacing))
+        n = len(candidate_grid(room, search.spacing_for(room)))
         if n < max(counts):
             raise ValueError(
                 f"anchors: {max(counts)} anchors exceed the {n} candidate points "
-                f"(spacing {search.spacing:g} m) of this room"
+                f"(spacing {search.spacing_for(room):g} m) of this room"
             )
         table = search_table(room, search, kw.get("nodes"), entropy, kw.get("executor"))
     t_table = time.perf_counter() - t0
@@ -160,14 +186,12 @@ def sweep(
         rows.append(_row(M, res, time.perf_counter() - t))
         if on_row is not None:
             on_row(M, rows[-1])
-    recommended = None
-    if target_p95 is not None:
-        recommended = next((r.M for r in rows if r.p95 <= target_p95), None)
     return SweepResult(
         rows=tuple(rows),
-        recommended=recommended,
+        recommended=recommend(rows, target_p95, target_availability),
         target_p95=target_p95,
         room=room,
         settings={"anchors": counts, "rng": entropy, "search": search.__dict__},
         timings={"table": t_table, "total": time.perf_counter() - t0},
+        target_availability=target_availability,
     )

@@ -608,6 +608,11 @@ def seed_then_pso(
     """
     room = room_or_default(room)
     run = _prepare(room, locals())
+    run["reach"] = reach_check(room, run["nodes"])
+    run["lattices"] = {
+        "spacing": run["search"].spacing_for(room),
+        "fine_spacings": list(run["search"].fine_spacings_for(room)),
+    }
     clock = _Clock()
     seed_layouts, summary = _seeds(room, run, clock)
     res = _run_swarm(room, run, seed_layouts, clock)
@@ -636,6 +641,43 @@ def seed_then_pso(
         pso=res,
         finalists=final,
     )
+
+
+def reach_check(room: Room, nodes=None) -> dict[str, Any]:
+    """The signal's reach against the room: the reach and near limit (m,
+    :class:`simulation.Signal`), and the longest and shortest distances between the nodes
+    (default ``room.grid()``) and the allowed mounting points. Logs a warning when the
+    room is larger than the reach (or a node nearer a mounting point than the near limit):
+    anchors that far give no range, and nodes may be left without a fix."""
+    from placement.surfaces import allowed_rectangles
+
+    grid = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
+    lo, hi, _ = allowed_rectangles(room)
+    # the farthest point of a box from a node is one of its corners, the nearest its clip
+    corners = np.stack([np.where(np.array(c, dtype=bool), hi, lo) for c in np.ndindex(2, 2, 2)])
+    far = np.max(np.linalg.norm(grid[:, None, None] - corners[None], axis=-1))
+    near = np.linalg.norm(grid[:, None] - np.clip(grid[:, None], lo, hi), axis=-1).min()
+    out = {
+        "reach_m": room.reach,
+        "near_limit_m": room.near_limit,
+        "farthest_m": float(far),
+        "nearest_m": float(near),
+    }
+    out["exceeded"] = bool(out["farthest_m"] > room.reach or out["nearest_m"] < room.near_limit)
+    if out["exceeded"]:
+        logger.warning(
+            "the room is larger than the signal's reach: mounting points lie up to %.1f m "
+            "from the nodes, the signal reaches %.2f m%s (chirp %.3g ms, window %.3g ms from "
+            "%.3g ms); anchors beyond it give no range, the plan scores availability first "
+            "and reports the share of node realizations without a fix",
+            out["farthest_m"],
+            room.reach,
+            f" and sees nothing nearer than {room.near_limit:.2f} m" if room.near_limit else "",
+            room.signal.chirp.duration * 1e3,
+            room.signal.window_span * 1e3,
+            room.signal.receiver.t_wake * 1e3,
+        )
+    return out
 
 
 def _prepare(room: Room, kw: dict) -> dict[str, Any]:
@@ -819,7 +861,8 @@ def _refine(room: Room, run: dict, res: PSOResult, clock: _Clock) -> list:
     on finer lattices of the range table (:func:`placement.simselect.refine_on_table`);
     [(name, anchors)]. Simulated costs with fine spacings only."""
     opt = run["search"]
-    if not (run["simulated"] and res.success and opt.fine_spacings and run.get("searched")):
+    fine = opt.fine_spacings_for(room)
+    if not (run["simulated"] and res.success and fine and run.get("searched")):
         return []
     from placement.simselect import refine_on_table
 
@@ -902,6 +945,7 @@ def _settings(run: dict, summary: dict, clock: _Clock) -> dict[str, Any]:
         else ("none" if run["seeds"] is None else "user"),
         "seed": run["entropy"],
         "search": dataclasses.asdict(run["search"]),
+        "search_lattices": run["lattices"],
         "seed_search": summary,
         "swarm": dataclasses.asdict(run["swarm"]),
         "particles": run["swarm"].particles,
@@ -913,5 +957,6 @@ def _settings(run: dict, summary: dict, clock: _Clock) -> dict[str, Any]:
         "validation": dataclasses.asdict(run["validation"]),
         "validate_realizations": run["validation"].realizations,
         "sigma": run["sigma"],
+        "reach": run["reach"],
         "nfev_by_phase": dict(clock.nfev),
     }

@@ -48,7 +48,8 @@ class RangeTable:
     """Simulated ranges of N candidate anchors at the nodes of D draws.
 
     candidates (N, 3) planned points (m); nodes (D, P, 3) the nodes of each draw (m);
-    ranges (D, P, N) estimated ranges (m); distances (D, P, N) true ranges from the
+    ranges (D, P, N) estimated ranges (m; NaN where the receiver reported none: the
+    candidate beyond the signal's reach, or not heard); distances (D, P, N) true ranges from the
     mounted points (m); region (lo (3,), hi (3,)) the room box where positioning starts.
     seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
     """
@@ -185,7 +186,7 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
             ],
             axis=1,
         )
-        ranges[d] = scene.dsp.ranges(scene.windows + noise, room.speed_of_sound)
+        ranges[d] = scene.detect(scene.windows + noise)[0]  # NaN: no range
         dist[d] = np.linalg.norm(nodes[d][:, None, :] - mounted[None], axis=-1)
     return ranges, dist
 
@@ -322,8 +323,9 @@ def table_errors(table: RangeTable, layouts) -> np.ndarray:
 
 def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
     """(L,) the simulated ``statistic`` of each layout's errors over all D · P table
-    entries (:func:`table_errors`); +inf for a layout where some fix is not finite or
-    whose anchors are collinear (``locate``'s status −1)."""
+    entries (:func:`table_errors`), availability first (a layout with a node realization
+    without a fix costs more than any with none: :data:`simulation.statistics.NO_FIX_COST`);
+    +inf for a layout whose anchors are collinear (``locate``'s status −1)."""
     fix = _fixes(table, layouts)
     e = _errors(table, fix)
     # collinear or coincident anchors leave the position undetermined: never a solution

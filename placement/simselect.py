@@ -48,6 +48,7 @@ from placement.rangetable import (
 from placement.result import LayoutResult
 from placement.surfaces import (
     MAX_ANCHORS,
+    allowed_area,
     candidate_grid,
     mounting_surfaces,
     new_points,
@@ -199,11 +200,22 @@ def fine_points(room: Room, anchors: np.ndarray, spacing: float, steps: int) -> 
     return np.concatenate(out)
 
 
+#: the candidate spacing (m) of the search in a room of ordinary size
+DEFAULT_SPACING = 0.4
+#: about the most candidate points the default spacing gives (a larger room gets a coarser
+#: grid; the refinement's fine lattices then resolve the chosen anchors)
+AUTO_CANDIDATES = 1000
+#: the finest lattice of the default refinement (m)
+FINEST_SPACING = 0.1
+
+
 @dataclass(frozen=True)
 class SearchOptions:
     """Settings of the range-table search (:func:`simulated_select`).
 
-    spacing : candidate grid spacing on the mounting surfaces (m).
+    spacing : candidate grid spacing on the mounting surfaces (m); None (the default):
+        :data:`DEFAULT_SPACING`, coarser in a large room so that the grid has about
+        :data:`AUTO_CANDIDATES` points at most (:meth:`spacing_for`).
     draws, exact_draws, mount_tolerance : the table's draws (:func:`range_table`): how
         many, how many keep the nodes and planned points exactly, and the radius (m) of
         the mounting error in the others.
@@ -219,7 +231,9 @@ class SearchOptions:
     evaluations : layouts scored per chain (the descent that finishes it comes on top).
     finish_neighbours : the neighbourhood of the finishing descents on the whole table
         (the nearest ``finish_neighbours`` of the ``neighbours``).
-    fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off).
+    fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off);
+        None (the default): the candidate spacing halved, and halved again, down to 0.1 m
+        (0.2 and 0.1 m from 0.4 m; :meth:`fine_spacings_for`).
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
     fine_neighbours : the swap neighbourhood of the descents on a grown table.
     fine_optima : the swarm's best distinct layouts that a plan refines on the fine lattices,
@@ -228,7 +242,7 @@ class SearchOptions:
     precision : the receiver DSP's precision for the table.
     """
 
-    spacing: float = 0.4
+    spacing: float | None = None
     draws: int = 3
     exact_draws: int = 2
     mount_tolerance: float = 0.03
@@ -240,7 +254,7 @@ class SearchOptions:
     patience: int = 16
     evaluations: int = 4500
     finish_neighbours: int = 16
-    fine_spacings: tuple[float, ...] = (0.2, 0.1)
+    fine_spacings: tuple[float, ...] | None = None
     fine_steps: int = 1
     fine_neighbours: int = 8
     fine_optima: int = 1
@@ -248,7 +262,8 @@ class SearchOptions:
     precision: str = "float32"
 
     def __post_init__(self) -> None:
-        checks.real("spacing", self.spacing, low=0.05, high=10.0, unit="m")
+        if self.spacing is not None:
+            checks.real("spacing", self.spacing, low=0.05, high=10.0, unit="m")
         checks.count("draws", self.draws, low=1, high=MAX_TABLE_DRAWS)
         checks.count("exact_draws", self.exact_draws, low=0, high=self.draws)
         check_mount_tolerance(self.mount_tolerance)
@@ -262,18 +277,41 @@ class SearchOptions:
         checks.count("evaluations", self.evaluations, low=1, high=10**7)
         checks.count("finish_neighbours", self.finish_neighbours, low=1, high=10_000)
         fine = self.fine_spacings
-        if isinstance(fine, str | bytes) or not isinstance(fine, Iterable):
-            raise ValueError(
-                f"fine_spacings: expected spacings in m, e.g. (0.2, 0.1), got {fine!r}"
-            )
-        object.__setattr__(self, "fine_spacings", tuple(fine))
-        for s in self.fine_spacings:
-            checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
+        if fine is not None:
+            if isinstance(fine, str | bytes) or not isinstance(fine, Iterable):
+                raise ValueError(
+                    f"fine_spacings: expected spacings in m, e.g. (0.2, 0.1), got {fine!r}"
+                )
+            object.__setattr__(self, "fine_spacings", tuple(fine))
+            for s in self.fine_spacings:
+                checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
         checks.count("fine_steps", self.fine_steps, low=1, high=10)
         checks.count("fine_neighbours", self.fine_neighbours, low=1, high=10_000)
         checks.count("fine_optima", self.fine_optima, low=1, high=1000)
         checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
+
+    def spacing_for(self, room: Room) -> float:
+        """The candidate spacing (m) in ``room``: ``spacing`` when given, else
+        :data:`DEFAULT_SPACING` or, where the allowed mounting area A (m²) would give more
+        than :data:`AUTO_CANDIDATES` points at it, √(A / AUTO_CANDIDATES) rounded up to
+        0.1 m (a 24 × 16 × 6 m hall: 1.0 m)."""
+        if self.spacing is not None:
+            return float(self.spacing)
+        area = float(np.sum(allowed_area(room)))
+        auto = math.ceil(10 * math.sqrt(area / AUTO_CANDIDATES)) / 10
+        return max(DEFAULT_SPACING, auto)
+
+    def fine_spacings_for(self, room: Room) -> tuple[float, ...]:
+        """The refinement's lattices (m) in ``room``: ``fine_spacings`` when given, else
+        the candidate spacing halved while it stays ≥ :data:`FINEST_SPACING`."""
+        if self.fine_spacings is not None:
+            return self.fine_spacings
+        out, s = [], self.spacing_for(room) / 2
+        while s >= FINEST_SPACING - 1e-9:
+            out.append(round(s, 6))
+            s /= 2
+        return tuple(out)
 
 
 def first_draws(table: RangeTable, n: int) -> RangeTable:
@@ -374,9 +412,9 @@ def search_table(
     room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None
 ) -> RangeTable:
     """The range table of a search: every point of
-    ``candidate_grid(room, options.spacing)`` on ``options.draws`` scene draws of ``nodes``
-    (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
-    cand = candidate_grid(room, options.spacing)
+    ``candidate_grid(room, options.spacing_for(room))`` on ``options.draws`` scene draws of
+    ``nodes`` (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
+    cand = candidate_grid(room, options.spacing_for(room))
     return range_table(
         room,
         cand,
@@ -451,7 +489,7 @@ def refine_on_table(
     workers: int = 1,
 ) -> tuple[list[tuple[np.ndarray, float, bool]], RangeTable, int]:
     """Refine layouts (k, M, 3) on finer lattices (module docstring, step 3): for each
-    spacing of ``options.fine_spacings`` in turn, the anchors of every layout and the
+    spacing of ``options.fine_spacings_for(room)`` in turn, the anchors of every layout and the
     lattice points around them become table columns (:func:`extend_table`, same draws)
     and each layout descends over its ``fine_neighbours`` nearest candidates. Returns
     [(anchors (M, 3), table cost, local)] per layout, the grown table and the layouts
@@ -463,7 +501,7 @@ def refine_on_table(
     nfev = 0
     if not current:
         return out, table, nfev
-    for level, spacing in enumerate(opt.fine_spacings):
+    for level, spacing in enumerate(opt.fine_spacings_for(room)):
         points = np.concatenate(
             [np.concatenate([a, fine_points(room, a, spacing, opt.fine_steps)]) for a in current]
         )

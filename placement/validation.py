@@ -59,10 +59,11 @@ class ValidationOptions:
 
 
 def summary(errors) -> dict[str, float]:
-    """σ (population), mean, P95 and RMS (m) of Euclidean errors, and how many
+    """σ (population), mean, P95 and RMS (m) of the fixes among Euclidean errors, how many,
+    and the availability, the share of node realizations with a fix
     (:func:`simulation.statistics.error_stats`)."""
     s = error_stats(np.asarray(errors, dtype=float).ravel())
-    return {k: s[k] for k in ("std", "mean", "p95", "rms", "n", "n_invalid")}
+    return {k: s[k] for k in ("std", "mean", "p95", "rms", "n", "n_invalid", "availability")}
 
 
 def held_out_grid(room: Room) -> np.ndarray:
@@ -129,9 +130,10 @@ def validate_layout(
     """The three checks of the module docstring for anchors (M, 3), as a plain dict.
 
     Keys: ``realizations``, ``seed``, ``std``, ``mean``, ``p95``, ``rms`` (m, the grid
-    check over all R · P errors), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
-    ``per_node`` (RMSE, σ, the paper's DOP and the RMS-based DOP per node), ``errors``
-    (R, P); ``held_out``
+    check over the fixes among all R · P errors), ``availability`` (the share of the R · P
+    with a fix; every summary has one), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
+    ``per_node`` (availability, RMSE, σ, the paper's DOP and the RMS-based DOP per node),
+    ``errors`` (R, P; NaN: no fix); ``held_out``
     with ``grid`` and ``random`` summaries; ``mounting`` with its summary. Each check
     draws its noise from its own stream of ``rng`` (an int seed, a numpy Generator drawn
     once, or None). Checks run on ``executor`` when
@@ -183,6 +185,7 @@ def validate_layout(
             "mean_peb": float(np.mean(peb(a, nodes, sigma))),
             "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
             "per_node": {
+                "availability": np.mean(np.isfinite(e), axis=0).tolist(),
                 "rmse": node_rmse(e).tolist(),
                 "std": node_std(e).tolist(),
                 "dop": dop(e, range_errors).tolist(),
@@ -205,7 +208,12 @@ def validate_layout(
             "draws": int(opt.mount_draws),
             **summary(errs),
         }
-    if not math.isfinite(out["std"]):
+    if out["availability"] < 1:
+        out["message"] = (
+            f"{100 * (1 - out['availability']):.2f} % of the node realizations have no fix "
+            "(fewer than 4 anchors heard); the statistics are over the fixes"
+        )
+    elif not math.isfinite(out["std"]):
         out["message"] = "some position errors are not finite"
     return out
 

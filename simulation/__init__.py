@@ -12,6 +12,7 @@ from simulation.positioning import PositionFix, locate
 from simulation.received import received_windows
 from simulation.receiver import Dsp, Receiver, dsp_for, reference_chain
 from simulation.room import SURFACES, Room
+from simulation.signal import Signal
 
 __all__ = [
     "SURFACES",
@@ -24,6 +25,7 @@ __all__ = [
     "RangingScene",
     "Receiver",
     "Room",
+    "Signal",
     "aim_vectors",
     "cardioid",
     "compute_paths",

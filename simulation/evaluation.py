@@ -23,12 +23,11 @@ import numpy as np
 import scipy.fft
 
 from simulation import checks, statistics
-from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
 from simulation.received import received_windows
-from simulation.receiver import DEFAULT_PRECISION, PRECISIONS, Receiver, dsp_for, signal_chain
+from simulation.receiver import DEFAULT_PRECISION, HEARD, PRECISIONS, dsp_for
 from simulation.room import Room, as_room
 
 #: noise samples held in memory at once when chunking realizations (bytes)
@@ -41,8 +40,9 @@ class RangingScene:
     """A layout in a room, prepared for drawing range realizations quickly.
 
     Holds the noise-free windows (P, M, N), the true distances (P, M), the per-anchor noise
-    σ (M,) of the SNR rule and the receiver DSP (``precision``: see
-    :class:`~simulation.receiver.Dsp`). ``ranges(rng)`` draws one realization.
+    σ (M,) of the SNR rule and the receiver DSP of the room's signal (``precision``: see
+    :class:`~simulation.receiver.Dsp`). ``ranges(rng)`` draws one realization: a range, or
+    NaN where the receiver reports none (``detect`` gives the status too).
     """
 
     def __init__(
@@ -52,14 +52,12 @@ class RangingScene:
         nodes=None,
         *,
         snr_db: float = DEFAULT_SNR_DB,
-        chirp: Chirp | None = None,
-        receiver: Receiver | None = None,
         precision: str = DEFAULT_PRECISION,
     ):
         self.room = room = as_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
         self.nodes = room.grid() if nodes is None else room.check_nodes(nodes)
-        self.chirp, self.receiver = signal_chain(chirp, receiver)
+        self.chirp, self.receiver = room.signal.chirp, room.signal.receiver
         self.snr_db = check_snr("snr_db", snr_db)
         checks.choice("precision", precision, PRECISIONS)
         n = len(self.nodes) * len(self.anchors) * self.receiver.window
@@ -68,10 +66,9 @@ class RangingScene:
         images = ImageSet.for_room(room)
         paths = compute_paths(room, self.anchors, self.nodes, images=images)
         self.distances = paths.length[:, :, 0]  # image 0 is the direct path
-        self.windows = received_windows(paths, c, self.chirp, self.receiver)
-        self.noise_sigma = noise_sigma(
-            room, self.anchors, snr_db, self.chirp, self.receiver, images=images
-        )
+        air = room.air_excess()
+        self.windows = received_windows(paths, c, self.chirp, self.receiver, air)
+        self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images)
         self.dsp = dsp_for(self.chirp, self.receiver, precision)
 
     @property
@@ -79,28 +76,42 @@ class RangingScene:
         """(P, M)."""
         return self.windows.shape[:2]
 
+    def detect(self, windows: np.ndarray, sigma=None) -> tuple[np.ndarray, np.ndarray]:
+        """Ranges (..., P, M) in metres (NaN: no range) and their status (...,
+        P, M) (:data:`simulation.receiver.RANGE_STATUS`) of windows (..., P, M, N), the
+        detection threshold set from ``sigma`` (M,) (default the scene's noise σ)."""
+        sigma = self.noise_sigma if sigma is None else sigma
+        c = self.room.speed_of_sound
+        return self.dsp.detect(windows, c, sigma, self.room.signal.delays, self.distances / c)
+
     def _to_ranges(self, windows: np.ndarray) -> np.ndarray:
-        return self.dsp.ranges(windows, self.room.speed_of_sound)
+        return self.detect(windows)[0]
 
     def noisy_windows(self, rng: np.random.Generator) -> np.ndarray:
         """(P, M, N) received windows of one realization: clean + σ_j · N(0, 1) from ``rng``."""
         return self.windows + self.noise_sigma[:, None] * rng.standard_normal(self.windows.shape)
 
     def ranges(self, rng: np.random.Generator | None = None, noise: bool = True) -> np.ndarray:
-        """(P, M) estimated ranges in metres for one realization drawn from ``rng``."""
+        """(P, M) estimated ranges in metres (NaN: no range) for one realization drawn
+        from ``rng``."""
         if not checks.flag("noise", noise):
             return self._to_ranges(self.windows)
         return self._to_ranges(self.noisy_windows(checks.rng("rng", rng)))
 
     def ranges_batch(self, rngs, noise: bool = True) -> np.ndarray:
-        """(len(rngs), P, M) ranges, realization r drawn from ``rngs[r]``."""
+        """(len(rngs), P, M) ranges (NaN: no range), realization r drawn from ``rngs[r]``."""
+        return self.draw_batch(rngs, noise)[0]
+
+    def draw_batch(self, rngs, noise: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(len(rngs), P, M) ranges and their statuses, realization r from ``rngs[r]``."""
         rngs = list(rngs)
         if not noise:
-            r0 = self._to_ranges(self.windows)
-            return np.broadcast_to(r0, (len(rngs), *r0.shape)).copy()
+            r0, s0 = self.detect(self.windows)
+            shape = (len(rngs), *r0.shape)
+            return np.broadcast_to(r0, shape).copy(), np.broadcast_to(s0, shape).copy()
         if not rngs:
-            return np.empty((0, *self.shape))
-        return self._to_ranges(np.stack([self.noisy_windows(g) for g in rngs]))
+            return np.empty((0, *self.shape)), np.empty((0, *self.shape), dtype=np.int8)
+        return self.detect(np.stack([self.noisy_windows(g) for g in rngs]))
 
 
 def simulate_ranges(
@@ -110,11 +121,11 @@ def simulate_ranges(
     noise: bool = True,
     rng: np.random.Generator | None = None,
     snr_db: float = DEFAULT_SNR_DB,
-    chirp: Chirp | None = None,
-    receiver: Receiver | None = None,
     precision: str = DEFAULT_PRECISION,
 ) -> np.ndarray:
-    """(P, M) range estimates in metres from the full simulation, one realization.
+    """(P, M) range estimates in metres from the full simulation, one realization, with the
+    room's signal (``room.signal``); NaN where the receiver hears no chirp or the time of
+    flight lies beyond the signal's reach (:mod:`simulation.receiver`).
 
     ``rng`` (numpy Generator, or a seed) draws the noise (a fresh unseeded one when None).
     Anchors may be anywhere in the room (on the mounting surfaces or not) but at least
@@ -123,15 +134,7 @@ def simulate_ranges(
     rng = checks.rng("rng", rng)
     room = as_room(room)
     checks.distinct("anchors", room.check_anchors(checks.reals("anchors", anchors), 1))
-    scene = RangingScene(
-        room,
-        anchors,
-        nodes,
-        snr_db=snr_db,
-        chirp=chirp,
-        receiver=receiver,
-        precision=precision,
-    )
+    scene = RangingScene(room, anchors, nodes, snr_db=snr_db, precision=precision)
     return scene.ranges(rng, noise=noise)
 
 
@@ -155,13 +158,18 @@ def _computed(fn, doc: str, *fields: str) -> functools.cached_property:
 class Evaluation:
     """Monte Carlo result of :func:`evaluate_layout` (metres throughout).
 
-    anchors (M, 3), nodes (P, 3); estimates (R, P, 3); ranges (R, P, M) estimated ranges;
-    range_errors (R, P, M) = ranges − true distances; errors (R, P) Euclidean position
-    errors; converged (R, P) solver flags; noise_sigma (M,) the AWGN σ per anchor; seed the
-    integer seed of the noise streams (``evaluate_layout(..., rng=seed)`` reproduces it).
-    Statistics (``std`` population σ, ``mean``, ``p95``, ``rms``) are over all R·P errors;
-    per node, :attr:`dop` is the paper's DOP (standard deviation of the error / σ_r) and
-    :attr:`dop_rms` the RMS-based one (RMSE / σ_r); formulas in :mod:`simulation.statistics`.
+    anchors (M, 3), nodes (P, 3); estimates (R, P, 3); ranges (R, P, M) estimated ranges
+    (NaN where the receiver reported none); range_status (R, P, M) why not
+    (:data:`simulation.receiver.RANGE_STATUS`); range_errors (R, P, M) = ranges − true
+    distances; errors (R, P) Euclidean position errors (NaN where fewer than 4 anchors
+    were heard: no fix); converged (R, P) solver flags; fix_status (R, P) the solver's
+    status (:data:`simulation.positioning.STATUS_MESSAGES`); noise_sigma (M,) the AWGN σ
+    per anchor; seed the integer seed of the noise streams (``evaluate_layout(...,
+    rng=seed)`` reproduces it). Statistics (``std`` population σ, ``mean``, ``p95``,
+    ``rms``) are over the fixes among all R·P, and ``availability`` is the share of the
+    R·P with a fix; per node, :attr:`dop` is the paper's DOP (standard deviation of the
+    error / σ_r) and :attr:`dop_rms` the RMS-based one (RMSE / σ_r); formulas in
+    :mod:`simulation.statistics`.
     """
 
     anchors: np.ndarray
@@ -175,6 +183,15 @@ class Evaluation:
     seed: int
     snr_db: float
     room: Room = field(repr=False)
+    range_status: np.ndarray = field(default=None, repr=False)
+    fix_status: np.ndarray = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.range_status is None:  # built by hand: every range a range
+            heard = np.where(np.isfinite(self.ranges), HEARD, 1).astype(np.int8)
+            object.__setattr__(self, "range_status", heard)
+        if self.fix_status is None:
+            object.__setattr__(self, "fix_status", np.where(self.converged, 1, 0))
 
     @property
     def realizations(self) -> int:
@@ -189,9 +206,31 @@ class Evaluation:
 
     @functools.cached_property
     def stats(self) -> dict:
-        """std, mean, p95, rms, median, max over all finite R·P Euclidean errors, with ``n``
-        and ``n_invalid`` (:func:`simulation.statistics.error_stats`)."""
+        """std, mean, p95, rms, median, max over the fixes among the R·P Euclidean errors,
+        with ``n``, ``n_invalid`` and ``availability``
+        (:func:`simulation.statistics.error_stats`)."""
         return statistics.error_stats(self.errors)
+
+    @property
+    def availability(self) -> float:
+        """The share of the R·P node realizations with a position fix (4 or more anchors
+        heard)."""
+        return self.stats["availability"]
+
+    @property
+    def heard(self) -> np.ndarray:
+        """(R, P, M) bool: the receiver reported a range."""
+        return self.range_status == HEARD
+
+    @property
+    def node_availability(self) -> np.ndarray:
+        """(P,) the share of realizations with a fix at each node."""
+        return np.mean(np.isfinite(self.errors), axis=0)
+
+    @property
+    def anchors_heard(self) -> np.ndarray:
+        """(P,) the mean number of anchors heard at each node over the realizations."""
+        return np.mean(np.sum(self.heard, axis=-1), axis=0)
 
     std = _stat("std", "population standard deviation σ of all R·P errors (m), the paper's σ")
     mean = _stat("mean", "mean of all R·P errors (m)")
@@ -239,6 +278,7 @@ class Evaluation:
     def to_dict(self, include_errors: bool = True) -> dict:
         """Plain JSON-ready dictionary (non-finite floats stay floats; the CLI maps them)."""
         ax = self.axis_errors
+        fixed = bool(np.any(np.isfinite(self.errors)))
         d = {
             "room": self.room.to_dict(),
             "anchors": self.anchors.tolist(),
@@ -251,13 +291,14 @@ class Evaluation:
                 **self.stats,
                 "n_unconverged": self.n_unconverged,
                 "anchor_geometry": self.geometry,
-                "axis_mean": np.mean(ax, axis=(0, 1)).tolist(),
-                "axis_p95": np.percentile(ax, 95, axis=(0, 1)).tolist(),
-                "range_error_median_abs": np.median(
-                    np.abs(self.range_errors), axis=(0, 1)
-                ).tolist(),
+                "axis_mean": np.nanmean(ax, axis=(0, 1)).tolist() if fixed else None,
+                "axis_p95": np.nanpercentile(ax, 95, axis=(0, 1)).tolist() if fixed else None,
+                "range_error_median_abs": _nanmedian_abs(self.range_errors).tolist(),
+                "heard_share": np.mean(self.heard, axis=(0, 1)).tolist(),
             },
             "per_node": {
+                "availability": self.node_availability.tolist(),
+                "anchors_heard": self.anchors_heard.tolist(),
                 "rmse": self.rmse.tolist(),
                 "std": self.node_std.tolist(),
                 "dop": self.dop.tolist(),
@@ -270,6 +311,17 @@ class Evaluation:
             d["errors"] = self.errors.tolist()
             d["converged"] = self.converged.tolist()
         return d
+
+
+def _nanmedian_abs(range_errors: np.ndarray) -> np.ndarray:
+    """(M,) median |range error| per anchor over its heard ranges (NaN if none)."""
+    e = np.abs(range_errors.reshape(-1, range_errors.shape[-1]))
+    out = np.full(e.shape[1], np.nan)
+    for j in range(e.shape[1]):  # M columns: no loop over nodes
+        v = e[:, j][np.isfinite(e[:, j])]
+        if v.size:
+            out[j] = np.median(v)
+    return out
 
 
 def _check_workers(workers) -> None:
@@ -286,19 +338,21 @@ def _check_workers(workers) -> None:
 
 
 def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, workers, noise):
-    """(R, P, M) ranges; realization r from ``SeedSequence(seed).spawn(R)[r]``, ``chunk``
-    realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise)."""
+    """(R, P, M) ranges and statuses; realization r from ``SeedSequence(seed).spawn(R)[r]``,
+    ``chunk`` realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise)."""
     P, M = scene.shape
     if chunk is None:
         chunk = max(1, NOISE_BUDGET_BYTES // (P * M * scene.receiver.window * 8))
     children = np.random.SeedSequence(seed).spawn(realizations)
     ranges = np.empty((realizations, P, M))
+    status = np.empty((realizations, P, M), dtype=np.int8)
     threads = contextlib.nullcontext() if workers is None else scipy.fft.set_workers(workers)
     with threads:
         for i in range(0, realizations, chunk):
             rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
-            ranges[i : i + len(rngs)] = scene.ranges_batch(rngs, noise=noise)
-    return ranges
+            part = slice(i, i + len(rngs))
+            ranges[part], status[part] = scene.draw_batch(rngs, noise=noise)
+    return ranges, status
 
 
 def evaluate_layout(
@@ -310,8 +364,6 @@ def evaluate_layout(
     *,
     noise: bool = True,
     snr_db: float = DEFAULT_SNR_DB,
-    chirp: Chirp | None = None,
-    receiver: Receiver | None = None,
     bounded: bool = False,
     max_iter: int = 100,
     chunk: int | None = None,
@@ -358,16 +410,8 @@ def evaluate_layout(
         value=realizations,
         hint=f"{n_nodes} nodes x {len(anchors)} anchors per realization; use fewer",
     )
-    scene = RangingScene(
-        room,
-        anchors,
-        nodes,
-        snr_db=snr_db,
-        chirp=chirp,
-        receiver=receiver,
-        precision=precision,
-    )
-    ranges = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
+    scene = RangingScene(room, anchors, nodes, snr_db=snr_db, precision=precision)
+    ranges, status = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
     region = (np.zeros(3), np.asarray(room.size, dtype=float))
     fix = locate(
         anchors, ranges, region=region, bounded=bounded, max_iter=max_iter, full_output=True
@@ -385,4 +429,6 @@ def evaluate_layout(
         seed=seed,
         snr_db=scene.snr_db,
         room=room,
+        range_status=status,
+        fix_status=fix.status,
     )

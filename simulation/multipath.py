@@ -9,7 +9,9 @@ at q has length d = ‖p − q‖ and amplitude
 
 with β = √(1 − α) the reflection amplitude of each wall hit (for n > 0 the path hits the
 plane at L ⌈n/2⌉ times and the plane at 0 ⌊n/2⌋ times, mirrored for n < 0), a the air
-attenuation coefficient and g(θ) = ½(1 + cos θ) the cardioid of the real speaker aimed at
+attenuation coefficient (``Room.air_reference``: the constant one, or ISO 9613-1 at the
+chirp's centre frequency, whose variation across the band :mod:`simulation.received`
+applies) and g(θ) = ½(1 + cos θ) the cardioid of the real speaker aimed at
 the room centroid. θ is measured for the ray as it leaves the real speaker: the direction
 image → node, mirrored back through the reflections, i.e. with the sign of each component
 flipped for every axis that is reflected an odd number of times. The node is
@@ -147,5 +149,5 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
     ok = d > 0
     safe = np.where(ok, d, 1.0)
     gain = cardioid(np.clip(proj / safe, -1.0, 1.0))
-    amp = images.reflection * gain * np.exp(-0.5 * room.air_absorption * d) / (4 * np.pi * safe)
+    amp = images.reflection * gain * np.exp(-0.5 * room.air_reference * d) / (4 * np.pi * safe)
     return Paths(length=d, amplitude=np.where(ok, amp, 0.0))

@@ -9,7 +9,9 @@ paths) has mean power P_j = mean(y_ref²), and the noise variance is
 the same at every node for that anchor, so the SNR falls with distance and off-axis angle
 (paper §V-A: "the SNR is defined for the closest mobile node to a specific anchor"). Noise
 is white Gaussian, independent across samples, nodes, anchors and realizations, and is
-added to the received window before the receiver DSP.
+added to the received window before the receiver DSP. Where the window misses the
+reference node's chirp (a signal design whose near limit exceeds that distance), P_j is
+the direct path's mean power A²/2 instead.
 """
 
 from __future__ import annotations
@@ -17,10 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from simulation import checks
-from simulation.chirp import Chirp
 from simulation.multipath import ImageSet, compute_paths
 from simulation.received import received_windows
-from simulation.receiver import Receiver
 from simulation.room import Room, as_room
 
 #: default SNR at the grid node closest to each anchor, dB (paper §V-A)
@@ -50,29 +50,26 @@ def noise_sigma(
     room: Room,
     anchors,
     snr_db: float = DEFAULT_SNR_DB,
-    chirp: Chirp | None = None,
-    receiver: Receiver | None = None,
     grid_shape=(9, 6, 5),
     images: ImageSet | None = None,
 ) -> np.ndarray:
     """(M,) noise standard deviation σ_j per anchor (units of the received signal).
 
-    σ_j² = mean(y_ref,j²) / 10^(snr_db/10), y_ref,j the noise-free window of anchor j at
-    its :func:`reference_nodes` node.
+    σ_j² = mean(y_ref,j²) / 10^(snr_db/10), y_ref,j the noise-free window (the room's
+    signal) of anchor j at its :func:`reference_nodes` node.
     """
     snr_db = check_snr("snr_db", snr_db)
     room = as_room(room)
     a = checks.points("anchors", anchors)
     ref = reference_nodes(room, a, grid_shape)
     paths = compute_paths(room, a, ref, images=images)  # (M nodes, M anchors, I)
-    w = received_windows(paths, room.speed_of_sound, chirp, receiver)
-    own = w[np.arange(len(a)), np.arange(len(a))]  # (M, N): node j with anchor j
+    sig = room.signal
+    w = received_windows(paths, room.speed_of_sound, sig.chirp, sig.receiver, room.air_excess())
+    j = np.arange(len(a))
+    own = w[j, j]  # (M, N): node j with anchor j
     power = np.mean(own * own, axis=-1)
+    # a window that misses the chirp at the reference node (a design with a near limit):
+    # the mean power A²/2 of its direct path instead
+    direct = paths.amplitude[j, j, 0]
+    power = np.where(power > 0, power, 0.5 * direct * direct)
     return np.sqrt(power / 10.0 ** (snr_db / 10.0))
-
-
-def add_noise(windows: np.ndarray, sigma, rng: np.random.Generator) -> np.ndarray:
-    """windows (..., M, N) plus white Gaussian noise of σ (M,) per anchor (a new array)."""
-    w = np.asarray(windows, dtype=float)
-    s = np.asarray(sigma, dtype=float)[:, None]
-    return w + s * rng.standard_normal(w.shape)

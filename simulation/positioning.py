@@ -15,6 +15,12 @@ of ``region``. Unbounded by default; ``bounded=True`` keeps every iterate in ``r
 Every node gets a status (modelled on scipy ``least_squares``): 1 gradient small, 2 cost
 change small, 3 step small, 4 zero residual, 0 iteration limit (not converged: the best
 iterate is returned and flagged, never silently).
+
+Missing ranges (NaN: the receiver heard no chirp from that anchor) leave their anchor
+out of that node's sums: a node with 4 or more heard anchors, not collinear, is solved
+from those alone (start, bounds and iterations as if only they had been given); a node
+with fewer has no fix: status −2, position NaN (docs/model.md, "Positioning with the
+anchors that hear the tag").
 """
 
 from __future__ import annotations
@@ -37,9 +43,14 @@ STATUS_MESSAGES = {
     3: "step below xtol",
     4: "zero residual",
     -1: "anchors collinear or coincident: the position is not determined",
+    -2: "no fix: fewer than 4 anchors heard (or the heard ones collinear)",
 }
 #: ranges below this (m) are not measurements; the receiver's noisy ranges reach -0.34 m
 RANGE_FLOOR = -1.0
+#: ranges above this (m) are not indoor measurements
+RANGE_CEILING = 1e5
+#: the fewest heard anchors that fix a node with missing ranges
+MIN_HEARD = 4
 
 
 @dataclass(frozen=True)
@@ -154,8 +165,10 @@ def locate(
     Returns (..., P, 3) estimates, or a :class:`PositionFix`. Nodes that hit ``max_iter``
     return their best iterate and ``converged = False`` (logged at DEBUG). With collinear
     or coincident anchors (closer than 1 mm to a line) the position is not determined:
-    every node of that layout gets status −1 and ``converged = False``. Ranges below
-    −1 m (a noisy range may be slightly negative) raise ``ValueError``.
+    every node of that layout gets status −1 and ``converged = False``. A NaN range is a
+    missing one (module docstring): a node needs 4 heard anchors, else it gets status −2
+    and NaN. Ranges below −1 m (a noisy range may be slightly negative), above 1e5 m or
+    infinite raise ``ValueError``.
     """
     a, rho, max_iter = _check_input(
         anchors,
@@ -170,7 +183,13 @@ def locate(
     layouts = a.reshape(-1, M, 3)
     owner, lo, hi = _rows(layouts, len(R), region)
     svd = _centred_svd(layouts)
+    heard = ~np.isnan(R)
+    partial = ~np.all(heard, axis=1)
+    if np.any(partial):
+        lo, hi = _heard_bounds(layouts, owner, heard, partial, lo, hi, region)
     x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
+    if np.any(partial) and x0 is None:
+        _masked_starts(layouts, _c(owner, np.int64), _c(R), _c(lo), _c(hi), _c(partial), x)
     if bounded:
         x = np.clip(x, lo, hi)
     start = x.copy()
@@ -180,6 +199,12 @@ def locate(
     rank = np.atleast_1d(checks.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
     # collinear: rotation about the anchor line leaves the ranges unchanged
     status[(rank < 2)[owner]] = -1
+    if np.any(partial):
+        lost = partial.copy()
+        lost[partial] = ~_fixable(layouts, owner[partial], heard[partial])
+        status[lost] = -2
+        x[lost] = np.nan
+        cost[lost] = np.nan
     converged = status > 0
     if not np.all(converged):
         logger.debug(
@@ -207,7 +232,7 @@ def _check_input(anchors, ranges, max_iter, tols, flags) -> tuple[np.ndarray, np
         raise ValueError(f"anchors: expected shape (M, 3) or (L, M, 3) with M >= 3, got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError("anchors: must be finite")
-    rho = checks.reals("ranges", ranges)
+    rho = checks.reals("ranges", ranges, finite=False)  # NaN: not heard (checked below)
     M = a.shape[-2]
     if rho.ndim < 1 or rho.shape[-1] != M:
         raise ValueError(f"ranges: expected shape (..., P, {M}), got {rho.shape}")
@@ -216,12 +241,14 @@ def _check_input(anchors, ranges, max_iter, tols, flags) -> tuple[np.ndarray, np
             f"ranges: with {a.shape[0]} layouts expected shape ({a.shape[0]}, ..., P, {M}), "
             f"got {rho.shape}"
         )
-    if not np.all(np.isfinite(rho)):
-        raise ValueError("ranges: must be finite (no NaN or inf)")
-    if rho.size and rho.min() < RANGE_FLOOR:
+    if np.any(np.isinf(rho)):
+        raise ValueError("ranges: must be finite distances or NaN (not heard), got inf")
+    given = rho[~np.isnan(rho)]
+    if given.size and (given.min() < RANGE_FLOOR or given.max() > RANGE_CEILING):
+        bad = given.min() if given.min() < RANGE_FLOOR else given.max()
         raise ValueError(
-            f"ranges: must be distances >= {RANGE_FLOOR:g} m (noisy ranges may be slightly "
-            f"negative), got {rho.min():g} m"
+            f"ranges: must be distances in [{RANGE_FLOOR:g}, {RANGE_CEILING:g}] m (noisy ranges "
+            f"may be slightly negative) or NaN (not heard), got {bad:g} m"
         )
     max_iter = checks.count("max_iter", max_iter, low=1)
     for name, tol in zip(("xtol", "ftol", "gtol"), tols, strict=True):
@@ -266,6 +293,91 @@ def _start(a, R, owner, lo, hi, x0, lead, svd) -> np.ndarray:
     return x
 
 
+def _heard_bounds(a, owner, heard, partial, lo, hi, region):
+    """The bounds (B, 3) of every row: without ``region``, a row with missing ranges gets
+    the bounding box of its heard anchors (as if only they had been given)."""
+    if region is not None:
+        return lo, hi
+    lo, hi = lo.copy(), hi.copy()
+    pts = a[owner[partial]]  # (Bp, M, 3)
+    mask = heard[partial][..., None]
+    any_heard = np.any(heard[partial], axis=1)
+    lo_p = np.min(np.where(mask, pts, np.inf), axis=1)
+    hi_p = np.max(np.where(mask, pts, -np.inf), axis=1)
+    rows = np.flatnonzero(partial)[any_heard]
+    lo[rows], hi[rows] = lo_p[any_heard], hi_p[any_heard]
+    return lo, hi
+
+
+def _fixable(a: np.ndarray, owner: np.ndarray, heard: np.ndarray) -> np.ndarray:
+    """(B,) bool: at least :data:`MIN_HEARD` heard anchors, not collinear (the rank rule
+    of :func:`simulation.checks.rank_of_spread` on the heard subset)."""
+    n = heard.sum(axis=1)
+    pts = a[owner]  # (B, M, 3)
+    w = heard[..., None]
+    mean = np.sum(np.where(w, pts, 0.0), axis=1) / np.maximum(n, 1)[:, None]
+    dev = np.where(w, pts - mean[:, None], 0.0)
+    scatter = np.einsum("bmi,bmj->bij", dev, dev)
+    sv = np.sqrt(np.maximum(np.linalg.eigvalsh(scatter), 0.0))[:, ::-1]
+    rank = np.sum(sv / np.sqrt(np.maximum(n, 1))[:, None] > checks.MIN_ANCHOR_DISTANCE, axis=1)
+    return (n >= MIN_HEARD) & (rank >= 2)
+
+
+@numba.njit(cache=True)
+def _masked_starts(a, owner, R, lo, hi, rows, x):  # pragma: no cover - compiled
+    """For the ``rows`` with missing ranges, the linear solution of the heard anchors'
+    squared-range differences (module docstring) written into x (B, 3) when it lies in
+    [lo, hi] and the heard anchors are not coplanar (normal equations, cofactors)."""
+    for b in range(R.shape[0]):
+        if not rows[b]:
+            continue
+        ab, rho = a[owner[b]], R[b]
+        n = 0
+        m0 = m1 = m2 = ma2 = mr2 = 0.0
+        for j in range(ab.shape[0]):
+            if rho[j] == rho[j]:
+                n += 1
+                m0 += ab[j, 0]
+                m1 += ab[j, 1]
+                m2 += ab[j, 2]
+                ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
+                mr2 += rho[j] * rho[j]
+        if n < 4:
+            continue
+        m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
+        s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
+        for j in range(ab.shape[0]):
+            if rho[j] == rho[j]:
+                c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
+                rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (
+                    rho[j] * rho[j] - mr2
+                )
+                s00 += c0 * c0
+                s01 += c0 * c1
+                s02 += c0 * c2
+                s11 += c1 * c1
+                s12 += c1 * c2
+                s22 += c2 * c2
+                g0 += c0 * rhs
+                g1 += c1 * rhs
+                g2 += c2 * rhs
+        c00 = s11 * s22 - s12 * s12
+        c01 = s02 * s12 - s01 * s22
+        c02 = s01 * s12 - s02 * s11
+        c11 = s00 * s22 - s02 * s02
+        c12 = s01 * s02 - s00 * s12
+        c22 = s00 * s11 - s01 * s01
+        det = s00 * c00 + s01 * c01 + s02 * c02
+        tr = s00 + s11 + s22
+        if not det > 1e-18 * tr * tr * tr:  # coplanar heard anchors: start at the centre
+            continue
+        p0 = (c00 * g0 + c01 * g1 + c02 * g2) / det
+        p1 = (c01 * g0 + c11 * g1 + c12 * g2) / det
+        p2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
+        if lo[b, 0] <= p0 <= hi[b, 0] and lo[b, 1] <= p1 <= hi[b, 1] and lo[b, 2] <= p2 <= hi[b, 2]:
+            x[b, 0], x[b, 1], x[b, 2] = p0, p1, p2
+
+
 def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
     """Damped Gauss–Newton (Levenberg–Marquardt, Nielsen's damping update) on every row:
     ranges R (B, M), anchors a (L, M, 3) with row b's layout ``owner[b]``, starts x (B, 3)
@@ -301,6 +413,10 @@ def _residuals(x, a, rho, r, u):  # pragma: no cover - compiled
     x (3,) for ranges rho (M,); returns ½Σr²."""
     cost = 0.0
     for j in range(a.shape[0]):
+        if rho[j] != rho[j]:  # NaN: not heard, no residual
+            r[j] = 0.0
+            u[j, 0] = u[j, 1] = u[j, 2] = 0.0
+            continue
         d0, d1, d2 = x[0] - a[j, 0], x[1] - a[j, 1], x[2] - a[j, 2]
         dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         inv = 1.0 / dist if dist > 0 else 1.0

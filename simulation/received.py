@@ -10,6 +10,14 @@ with s the analytic chirp (zero outside [0, T]), so no impulse responses are nee
 fractional delays are exact. Paths whose chirp does not overlap the window (they arrive
 after it closes, or the chirp has ended before it opens) and zero-amplitude paths are not
 evaluated.
+
+Frequency-dependent air absorption (``Room(air_absorption="iso9613")``): the amplitudes
+A_i hold the attenuation at the chirp's centre frequency; the rest of the band is applied
+as an envelope along the chirp, A_i · exp(−½ d_i Δm(f(u))), with f(u) = f0 + k·u the
+instantaneous frequency at chirp time u = t_n − τ_i and Δm(f) = m(f) − m(f_centre). This is
+the chirp filtered by the path's attenuation |H_i(f)| = exp(−½ d_i m(f)) in the
+stationary-phase approximation, which holds because the attenuation varies little over the
+chirp's instantaneous bandwidth (docs/model.md, "Air absorption").
 """
 
 from __future__ import annotations
@@ -30,9 +38,21 @@ def active_paths(delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiv
 
 
 def synthesize(
-    delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiver: Receiver
+    delays: np.ndarray,
+    amplitude: np.ndarray,
+    chirp: Chirp,
+    receiver: Receiver,
+    *,
+    lengths: np.ndarray | None = None,
+    air=None,
 ) -> np.ndarray:
     """Noise-free windows (..., N) for path delays and amplitudes (..., I) (s, unit chirp).
+
+    ``air`` (a function f ↦ Δm(f) in 1/m, e.g. ``Room.air_excess()``) with the path
+    ``lengths`` (..., I) in m applies the air's attenuation across the band (module
+    docstring): exactly sample by sample for paths evaluated directly, and for the fast
+    form below with ln of the envelope linear across the window, its value and slope
+    taken at the window's centre frequency.
 
     Fast form of :func:`synthesize_direct` (equal to ~1e-13 relative). For a path whose
     chirp covers the whole window, with u0 = t_wake − τ the chirp's time at sample 0, the
@@ -56,10 +76,15 @@ def synthesize(
     N, fs = receiver.window, receiver.fs
     tau = delays.reshape(n_win, -1)
     amp = amplitude.reshape(n_win, -1)
+    dist = None
+    if air is not None:
+        if lengths is None or np.shape(lengths) != delays.shape:
+            raise ValueError(f"lengths: expected the shape of delays {delays.shape} with air")
+        dist = np.asarray(lengths, dtype=float).reshape(n_win, -1)
     act = active_paths(tau, amp, chirp, receiver)
     u0 = receiver.t_wake - tau
     whole = act & (u0 >= 0) & (u0 + (N - 1) / fs <= chirp.duration)
-    out = _synthesize_direct_rows(tau, amp, act & ~whole, chirp, receiver)
+    out = _synthesize_direct_rows(tau, amp, act & ~whole, chirp, receiver, dist, air)
     if not np.any(whole):
         return out.reshape(*lead, N)
     # gather the whole-window paths of each window to the front, drop empty columns
@@ -75,13 +100,19 @@ def synthesize(
     Q = 16
     nq = -(-N // Q)
     weights = w_amp * np.exp(1j * alpha)
+    step = 1j * beta  # per sample: e^{iβ}, times the envelope's e^{b} with air
+    if air is not None:
+        d = np.take_along_axis(dist, order, axis=1)
+        log0, b = _air_envelope(air, d, u, chirp, receiver)
+        weights = weights * np.exp(log0)
+        step = step + b
     er = np.empty((n_win, width, Q), dtype=complex)  # e^{iβr}, r = 0…Q−1
     er[..., 0] = 1.0
-    er[..., 1:] = np.exp(1j * beta)[..., None]
+    er[..., 1:] = np.exp(step)[..., None]
     np.cumprod(er, axis=-1, out=er)
     eq = np.empty((n_win, width, nq), dtype=complex)  # A e^{iα} e^{iβQq}, q = 0…nq−1
     eq[..., 0] = weights
-    eq[..., 1:] = np.exp(1j * Q * beta)[..., None]
+    eq[..., 1:] = np.exp(Q * step)[..., None]
     np.cumprod(eq, axis=-1, out=eq)
     z = np.matmul(eq.transpose(0, 2, 1), er).reshape(n_win, nq * Q)[:, :N]
     n = np.arange(N)
@@ -90,30 +121,58 @@ def synthesize(
     return out.reshape(*lead, N)
 
 
-def _synthesize_direct_rows(tau, amp, mask, chirp: Chirp, receiver: Receiver) -> np.ndarray:
-    """(W, N) Σ over masked paths of A·s(t_n − τ), evaluated sample by sample."""
+def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Receiver):
+    """ln of the air envelope exp(−½ d Δm(f)) linear in the sample n across the window:
+    (value at n = 0, slope per sample), from Δm and its derivative at the window's centre
+    frequency, for paths of lengths d whose chirp time at sample 0 is u0 (same shapes)."""
+    n_mid = 0.5 * (receiver.window - 1)
+    f_mid = chirp.f0 + chirp.rate * (u0 + n_mid / receiver.fs)
+    h = 1.0  # Hz: a central difference of a function smooth on the scale of kHz
+    dm = air(f_mid)
+    slope_f = (air(f_mid + h) - air(f_mid - h)) / (2 * h)  # 1/m per Hz
+    b = -0.5 * d * slope_f * chirp.rate / receiver.fs  # per sample
+    return -0.5 * d * dm - b * n_mid, b
+
+
+def _synthesize_direct_rows(
+    tau, amp, mask, chirp: Chirp, receiver: Receiver, dist=None, air=None
+) -> np.ndarray:
+    """(W, N) Σ over masked paths of A·s(t_n − τ), evaluated sample by sample (with the
+    air's envelope exp(−½ d Δm(f(u))) when ``air`` is given, ``dist`` the path lengths)."""
     n_win, N = tau.shape[0], receiver.window
     out = np.zeros((n_win, N))
     rows, _ = np.nonzero(mask)  # row-major: sorted by window
     if rows.size:
         u = (receiver.t_wake - tau[mask])[:, None] + np.arange(N) / receiver.fs
         contrib = amp[mask][:, None] * chirp(u)
+        if air is not None:
+            f = chirp.f0 + chirp.rate * np.clip(u, 0.0, chirp.duration)
+            contrib *= np.exp(-0.5 * dist[mask][:, None] * air(f))
         starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
         out[rows[starts]] = np.add.reduceat(contrib, starts, axis=0)
     return out
 
 
 def synthesize_direct(
-    delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiver: Receiver
+    delays: np.ndarray,
+    amplitude: np.ndarray,
+    chirp: Chirp,
+    receiver: Receiver,
+    *,
+    lengths: np.ndarray | None = None,
+    air=None,
 ) -> np.ndarray:
-    """Reference form of :func:`synthesize`: every active path's chirp, sample by sample."""
+    """Reference form of :func:`synthesize`: every active path's chirp, sample by sample
+    (the air's envelope exactly at every sample)."""
     delays = np.asarray(delays, dtype=float)
     amplitude = np.asarray(amplitude, dtype=float)
     lead = delays.shape[:-1]
     tau = delays.reshape(-1, delays.shape[-1])
     amp = amplitude.reshape(tau.shape)
+    dist = None if air is None else np.asarray(lengths, dtype=float).reshape(tau.shape)
     act = active_paths(tau, amp, chirp, receiver)
-    return _synthesize_direct_rows(tau, amp, act, chirp, receiver).reshape(*lead, receiver.window)
+    out = _synthesize_direct_rows(tau, amp, act, chirp, receiver, dist, air)
+    return out.reshape(*lead, receiver.window)
 
 
 def received_windows(
@@ -121,13 +180,22 @@ def received_windows(
     speed_of_sound: float,
     chirp: Chirp | None = None,
     receiver: Receiver | None = None,
+    air=None,
 ) -> np.ndarray:
     """(P, M, N) noise-free received windows of :class:`~simulation.multipath.Paths`;
-    ``speed_of_sound`` in m/s."""
+    ``speed_of_sound`` in m/s; ``air`` the room's frequency-dependent excess attenuation
+    (``Room.air_excess()``; None: the amplitudes hold all of it)."""
     if not isinstance(paths, Paths):
         raise ValueError(f"paths: must be simulation.multipath.Paths, got {checks.describe(paths)}")
     speed_of_sound = checks.real(
         "speed_of_sound", speed_of_sound, low=0.0, low_open=True, unit="m/s"
     )
     chirp, receiver = signal_chain(chirp, receiver)
-    return synthesize(paths.delays(speed_of_sound), paths.amplitude, chirp, receiver)
+    return synthesize(
+        paths.delays(speed_of_sound),
+        paths.amplitude,
+        chirp,
+        receiver,
+        lengths=paths.length,
+        air=air,
+    )

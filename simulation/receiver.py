@@ -12,7 +12,25 @@ after the chirp starts. Each received window x (N,) goes through
    centred, with zero boundaries: ``scipy.signal.convolve(a, h ⋆ h, "same")``;
 4. k = argmax of the low-passed curve, snapped to the nearest local maximum of a (ties to
    the lower index);
-5. the window starts at chirp sample s = k + 1 − N, so τ = (t_wake·fs − s)/fs, r = c·τ.
+5. the window starts at chirp sample s = k + 1 − N, so τ = (t_wake·fs − s)/fs, r = c·τ;
+6. the range is kept only when the direct path's time of flight lies within the signal's
+   reach (:mod:`simulation.signal`: the window can hold its chirp) and the chirp was heard:
+   the window has a peak (|c[k]| > 0) and, with a detection threshold (``false_alarm``
+   set), |c[k]| > η·σ·‖g_k‖ with the picked time of flight τ̂ within the reach too;
+   otherwise the receiver reports "no range" (NaN, with a status of :data:`RANGE_STATUS`).
+
+Detection (docs/model.md, "Detection"). For white noise of σ per sample, c = G x is
+Gaussian at every lag k with standard deviation σ·‖g_k‖, g_k the k-th row of the linear map
+G of steps 1–2 (known exactly). A noise-only window is declared heard when its picked lag
+exceeds η standard deviations; by the union bound over the Nc lags that happens with
+probability at most Nc · 2Q(η), so η = Q⁻¹(P_fa / (2 Nc)) keeps the false-alarm rate per
+window below ``Receiver.false_alarm`` = P_fa. σ is the noise level of the SNR rule
+(:mod:`simulation.noise`): the receiver knows its own noise floor, as one measured while no
+anchor transmits; the threshold stays when a simulation adds no noise, so a noise-free
+window is heard when its peak clears it. The paper's receiver has no threshold
+(``false_alarm=None``, the default): for an anchor within the reach it reports its pick
+wherever it lands, as the paper's receiver does (a late echo picked beyond the reach is
+its error, not a missing range).
 
 :func:`reference_chain` is this chain written literally (one window at a time) and the
 definition. :class:`Dsp` is the batched fast form used by the simulator, which gives the
@@ -37,10 +55,28 @@ import scipy.fft
 from simulation import checks
 from simulation.chirp import Chirp
 
+#: accepted false-alarm probability per window of the detection (exclusive of 0)
+FALSE_ALARM_RANGE = (0.0, 0.5)
+
+#: what the receiver made of a window: a range, or why not (the range is NaN then)
+RANGE_STATUS = {
+    0: "heard: a range",
+    1: "not heard: no correlation peak above the detection threshold",
+    2: "out of reach: the time of flight lies outside the signal's reach",
+}
+HEARD, NOT_HEARD, OUT_OF_REACH = 0, 1, 2
+
 
 @dataclass(frozen=True)
 class Receiver:
-    """Sampling and DSP settings of the mobile node (defaults: docs/model.md)."""
+    """Sampling, DSP and detection settings of the mobile node (defaults: docs/model.md).
+
+    fs : sampling rate (Hz). t_wake : when the node wakes, seconds after the chirp starts.
+    window : samples N it records from then. highpass_order, highpass_cutoff (Hz),
+    lowpass_taps, lowpass_cutoff (Hz) : the DSP filters. false_alarm : the detection
+    threshold's bound on the probability that a window of noise alone gives a range
+    (module docstring), in (0, 0.5); None (the paper's receiver): no threshold.
+    """
 
     fs: float = 192e3
     t_wake: float = 29e-3
@@ -49,6 +85,7 @@ class Receiver:
     highpass_cutoff: float = 15e3
     lowpass_taps: int = 1000
     lowpass_cutoff: float = 5e3
+    false_alarm: float | None = None
 
     def __post_init__(self) -> None:
         checks.real("fs", self.fs, low=0.0, high=10e6, low_open=True, unit="Hz")
@@ -62,6 +99,9 @@ class Receiver:
                 )
         order = checks.count("highpass_order", self.highpass_order, low=1, high=40)
         checks.count("lowpass_taps", self.lowpass_taps, low=1, high=100_000)
+        if self.false_alarm is not None:
+            lo, hi = FALSE_ALARM_RANGE
+            checks.real("false_alarm", self.false_alarm, low=lo, high=hi, low_open=True)
         # sosfiltfilt pads the window by 3 (2S + 1 − odd) samples, S = ⌈order/2⌉ sections
         pad = 3 * (2 * math.ceil(order / 2) + 1 - order % 2)
         if self.window <= pad:
@@ -238,6 +278,15 @@ class Dsp:
         self._H = self.lowpass_response.astype(self.dtype)
         # raw peaks of |c| are half a carrier period apart: search a few periods around
         self.snap_width = max(32, math.ceil(receiver.fs / min(chirp.f0, chirp.f1)) + 2)
+        #: (Nc,) ‖g_k‖: the standard deviation of c[k] for white noise of unit σ
+        self.noise_gain = np.sqrt(np.einsum("nk,nk->k", self.G_T, self.G_T))
+        #: η: the detection threshold in noise standard deviations (module docstring); 0
+        #: without one (the paper's receiver)
+        self.threshold = (
+            0.0
+            if receiver.false_alarm is None
+            else detection_threshold(receiver.false_alarm, self.n_corr)
+        )
 
     def correlation(self, windows: np.ndarray) -> np.ndarray:
         """(B, Nc) raw curve |c| of windows (B, N)."""
@@ -249,19 +298,25 @@ class Dsp:
         spec *= self.lowpass_response
         return scipy.fft.irfft(spec, n=self.nfft, axis=-1)[:, : self.n_corr]
 
-    def _block_indices(self, buf: np.ndarray) -> np.ndarray:
-        """Snapped indices (B,) of rows (B, nfft) holding c at lags 0 … Nc − 1, zeros after
-        (the correlation is replaced by |c| in place)."""
+    def _block_picks(self, buf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Snapped indices (B,) and the raw peaks |c[k]| there (B,) of rows (B, nfft)
+        holding c at lags 0 … Nc − 1, zeros after (c is replaced by |c| in place)."""
         curve = buf[:, : self.n_corr]
         np.abs(curve, out=curve)
         spec = scipy.fft.rfft(buf, axis=-1, workers=1)
         spec *= self._H
         lp = scipy.fft.irfft(spec, n=self.nfft, axis=-1, workers=1)
         lp[:, self.n_corr :] = -np.inf  # outside the correlation; argmax on whole rows is faster
-        return snap_to_peak(curve, np.argmax(lp, axis=-1), self.snap_width)
+        k = snap_to_peak(curve, np.argmax(lp, axis=-1), self.snap_width)
+        return k, curve[np.arange(len(k)), k].astype(float)
 
     def indices(self, windows: np.ndarray, block: int = 128) -> np.ndarray:
-        """Snapped full-correlation index k (...,) for windows (..., N).
+        """Snapped full-correlation index k (...,) for windows (..., N) (:meth:`picks`)."""
+        return self.picks(windows, block)[0]
+
+    def picks(self, windows: np.ndarray, block: int = 128) -> tuple[np.ndarray, np.ndarray]:
+        """Snapped full-correlation index k (...,) and raw peak |c[k]| (...,) for windows
+        (..., N).
 
         Windows go through in parts of up to :data:`PART_BYTES` of correlation: a part's
         correlation is one matrix product into a zero-padded buffer reused from part to part
@@ -280,6 +335,7 @@ class Dsp:
         n = flat.shape[0]
         step = block * max(1, PART_BYTES // (self.nfft * self.dtype.itemsize * block))
         out = np.empty(n, dtype=np.int64)
+        peak = np.empty(n)
         buf = np.zeros((min(step, n), self.nfft), dtype=self.dtype)
         threads = min(scipy.fft.get_workers(), -(-min(step, n) // block))
         pool = None
@@ -294,20 +350,58 @@ class Dsp:
                 np.matmul(part.astype(self.dtype, copy=False), self._G, out=rows[:, : self.n_corr])
                 starts = range(0, part.shape[0], block)
                 blocks = (rows[b : b + block] for b in starts)
-                results = (
-                    map(self._block_indices, blocks)
+                results = list(
+                    map(self._block_picks, blocks)
                     if pool is None
-                    else pool.map(self._block_indices, blocks)
+                    else pool.map(self._block_picks, blocks)
                 )
-                out[s : s + part.shape[0]] = np.concatenate(list(results))
+                out[s : s + part.shape[0]] = np.concatenate([r[0] for r in results])
+                peak[s : s + part.shape[0]] = np.concatenate([r[1] for r in results])
         finally:
             if pool is not None:
                 pool.shutdown()
-        return out.reshape(lead)
+        return out.reshape(lead), peak.reshape(lead)
 
     def ranges(self, windows: np.ndarray, speed_of_sound: float) -> np.ndarray:
-        """Range estimates in metres (...,) for windows (..., N)."""
+        """Range estimates in metres (...,) for windows (..., N), without detection."""
         return self.receiver.range_from_index(self.indices(windows), speed_of_sound)
+
+    def detect(
+        self,
+        windows: np.ndarray,
+        speed_of_sound: float,
+        noise_sigma,
+        delays: tuple[float, float],
+        direct_delays,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Ranges (...,) in metres and their status (...,) (:data:`RANGE_STATUS`) for
+        windows (..., N) (step 6 of the module docstring): NaN unless the direct path's
+        delay ``direct_delays`` (s, broadcast to the windows' leading shape) lies within
+        ``delays`` = (τ_min, τ_max) seconds (:attr:`simulation.signal.Signal.delays`) and
+        the picked peak exceeds η·σ·‖g_k‖ (``noise_sigma`` σ broadcast likewise; η = 0
+        without a threshold, and then any peak > 0 is heard) with, under a threshold,
+        the picked delay within ``delays`` too."""
+        k, peak = self.picks(windows)
+        r = self.receiver.range_from_index(k, speed_of_sound)
+        sigma = np.broadcast_to(np.asarray(noise_sigma, dtype=float), k.shape)
+        heard = peak > self.threshold * sigma * self.noise_gain[k]
+        lo, hi = delays
+        direct = np.broadcast_to(np.asarray(direct_delays, dtype=float), k.shape)
+        seen = (direct >= lo) & (direct <= hi)
+        if self.receiver.false_alarm is not None:  # a detecting receiver checks its pick too
+            tau = (self.receiver.wake_sample - (k + 1.0 - self.receiver.window)) / self.receiver.fs
+            seen &= (tau >= lo) & (tau <= hi)
+        status = np.where(seen, np.where(heard, HEARD, NOT_HEARD), OUT_OF_REACH)
+        status = status.astype(np.int8)
+        return np.where(status == HEARD, r, np.nan), status
+
+
+def detection_threshold(false_alarm: float, lags: int) -> float:
+    """η = Q⁻¹(P_fa / (2·lags)): with it, noise alone exceeds η standard deviations at any
+    of ``lags`` Gaussian lags with probability at most P_fa (union bound)."""
+    from scipy.special import ndtri
+
+    return float(-ndtri(false_alarm / (2.0 * lags)))
 
 
 def signal_chain(chirp: Chirp | None, receiver: Receiver | None) -> tuple[Chirp, Receiver]:

@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from simulation import checks
+from simulation import air, checks
 from simulation.regions import free_cells, in_boxes
+from simulation.signal import Signal, as_signal
 
 #: The six planes of a shoebox: name -> (axis, side), side 0 is the plane at 0, 1 at L.
 SURFACES: dict[str, tuple[int, int]] = {
@@ -67,8 +68,14 @@ class Room:
         techtile values.
     temperature : air temperature in °C, in [−40, 60]; sets :attr:`speed_of_sound`.
     max_order : image-source reflection order, an integer in [0, 12].
-    air_absorption : air attenuation coefficient a in 1/m; a path of length d is
-        scaled in amplitude by exp(−a·d/2) (a in [0, 5]).
+    air_absorption : the air's attenuation: a number a in 1/m (in [0, 5]; a path of
+        length d is scaled in amplitude by exp(−a·d/2) at every frequency, the paper's
+        model), or ``"iso9613"``: ISO 9613-1 per frequency from ``temperature``,
+        ``humidity`` and ``pressure`` (:mod:`simulation.air`).
+    humidity : relative humidity of the air in %, in [0, 100] (ISO 9613-1 only).
+    pressure : air pressure in kPa, in [50, 110] (ISO 9613-1 only).
+    signal : the chirp and receiver (:class:`simulation.Signal`, or a mapping of its
+        keys; default the paper's design); its reach bounds the ranges the receiver sees.
     mounting : the surfaces anchors may be mounted on.
     anchor_offset : anchors sit this far (m) from their plane and at least this far
         from the neighbouring planes.
@@ -102,6 +109,9 @@ class Room:
     zone_spacing: float = 0.5
     keepout_names: tuple[str, ...] = ()
     zone_names: tuple[str, ...] = ()
+    humidity: float = 50.0
+    pressure: float = air.REFERENCE_PRESSURE
+    signal: Signal = field(default_factory=Signal)
 
     def __post_init__(self) -> None:
         lo, hi = SIZE_RANGE
@@ -150,9 +160,8 @@ class Room:
         object.__setattr__(
             self, "max_order", checks.count("max_order", self.max_order, low=0, high=MAX_ORDER)
         )
-        lo, hi = AIR_ABSORPTION_RANGE
-        a = checks.real("air_absorption", self.air_absorption, low=lo, high=hi, unit="1/m")
-        object.__setattr__(self, "air_absorption", a)
+        self._init_air()
+        object.__setattr__(self, "signal", as_signal(self.signal))
         if not isinstance(self.name, str):
             raise ValueError(f"name: must be a string, got {checks.describe(self.name)}")
         half = min(size) / 2
@@ -160,6 +169,27 @@ class Room:
             v = checks.real(fname, getattr(self, fname), low=0.0, high=half, high_open=True)
             object.__setattr__(self, fname, v)
         self._init_boxes(size)
+
+    def _init_air(self) -> None:
+        """Check the air model: a coefficient, or ISO 9613-1 with humidity and pressure."""
+        if isinstance(self.air_absorption, str):
+            if self.air_absorption != air.ISO9613:
+                raise ValueError(
+                    f"air_absorption: expected a coefficient in 1/m or {air.ISO9613!r}, "
+                    f"got {self.air_absorption!r}"
+                )
+        else:
+            lo, hi = AIR_ABSORPTION_RANGE
+            a = checks.real("air_absorption", self.air_absorption, low=lo, high=hi, unit="1/m")
+            object.__setattr__(self, "air_absorption", a)
+        lo, hi = air.HUMIDITY_RANGE
+        object.__setattr__(
+            self, "humidity", checks.real("humidity", self.humidity, low=lo, high=hi, unit="%")
+        )
+        lo, hi = air.PRESSURE_RANGE
+        object.__setattr__(
+            self, "pressure", checks.real("pressure", self.pressure, low=lo, high=hi, unit="kPa")
+        )
 
     def _init_boxes(self, size) -> None:
         """Normalize and check keep-outs and zones (after the other fields)."""
@@ -234,6 +264,8 @@ class Room:
             raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
         if isinstance(kw.get("mounting"), list):
             kw["mounting"] = tuple(kw["mounting"])
+        if "signal" in kw:
+            kw["signal"] = as_signal(kw["signal"])
         return cls(**kw)
 
     @classmethod
@@ -288,6 +320,13 @@ class Room:
                 ]
         if self.zones or self.zone_spacing != 0.5:
             d["zone_spacing"] = self.zone_spacing
+        if self.air_absorption == air.ISO9613 or self.humidity != 50.0:
+            d["humidity"] = self.humidity
+        if self.air_absorption == air.ISO9613 or self.pressure != air.REFERENCE_PRESSURE:
+            d["pressure"] = self.pressure
+        signal = self.signal.to_dict()
+        if signal:  # the paper's design is the default: a plain room's dictionary is unchanged
+            d["signal"] = signal
         return d
 
     def to_toml(self, path: str | Path) -> None:
@@ -297,12 +336,12 @@ class Room:
         d = self.to_dict()
         absorption = d.pop("absorption")
         tables = {"keepout": d.pop("keepouts", []), "zone": d.pop("zones", [])}
+        signal = d.pop("signal", {})
         for k, v in d.items():
             lines.append(f"{k} = {_toml_value(v)}")
-        lines.append("")
-        lines.append("[absorption]")
-        for k, v in absorption.items():
-            lines.append(f"{k} = {_toml_value(v)}")
+        for name, table in (("absorption", absorption), ("signal", signal)):
+            if table:
+                lines += ["", f"[{name}]"] + [f"{k} = {_toml_value(v)}" for k, v in table.items()]
         for key, items in tables.items():
             for item in items:
                 lines += ["", f"[[{key}]]"] + [f"{k} = {_toml_value(v)}" for k, v in item.items()]
@@ -319,6 +358,46 @@ class Room:
         if self.sound_speed is not None:
             return float(self.sound_speed)
         return 331.3 * math.sqrt(1.0 + self.temperature / 273.15)
+
+    @property
+    def reach(self) -> float:
+        """The longest range (m) the signal's window sees at this room's speed of sound
+        (:meth:`simulation.Signal.reach`)."""
+        return self.signal.reach(self.speed_of_sound)
+
+    @property
+    def near_limit(self) -> float:
+        """The shortest range (m) the signal's window sees (0 for the paper's design)."""
+        return self.signal.near_limit(self.speed_of_sound)
+
+    @property
+    def diagonal(self) -> float:
+        """The longest distance between two points of the room (m)."""
+        return float(np.linalg.norm(self.size))
+
+    def air_coefficient(self, frequency) -> np.ndarray:
+        """The air's energy attenuation coefficient m(f) in 1/m at ``frequency`` (Hz, any
+        shape): the constant ``air_absorption``, or ISO 9613-1 (:mod:`simulation.air`)."""
+        f = np.asarray(frequency, dtype=float)
+        if self.air_absorption != air.ISO9613:
+            return np.full(f.shape, float(self.air_absorption))
+        db = air.iso9613_db_per_m(f, self.temperature, self.humidity, self.pressure)
+        return air.energy_coefficient(db)
+
+    @property
+    def air_reference(self) -> float:
+        """m at the chirp's centre frequency (1/m): the attenuation in the path amplitudes
+        (:mod:`simulation.multipath`); the constant coefficient when there is one."""
+        centre = 0.5 * (self.signal.chirp.f0 + self.signal.chirp.f1)
+        return float(self.air_coefficient(centre))
+
+    def air_excess(self):
+        """None for a constant coefficient, else the function f ↦ m(f) − m(f_centre) (1/m)
+        that the received windows apply across the chirp's band (:mod:`simulation.received`)."""
+        if self.air_absorption != air.ISO9613:
+            return None
+        ref = self.air_reference
+        return lambda f: self.air_coefficient(f) - ref
 
     @property
     def dimensions(self) -> np.ndarray:

@@ -9,17 +9,22 @@ Shapes: Euclidean errors ``errors`` are (R, P) for R noise realizations at P nod
 shape for :func:`error_stats`), signed range errors ``range_errors`` (R, P, M) for M
 anchors. Lengths in metres.
 
-Non-finite errors (NaN or ±inf) mark failed position fixes. They are never dropped
-silently:
+A NaN error is a node realization without a position fix (fewer than 4 anchors heard,
+:func:`simulation.positioning.locate`); ±inf marks a fix that failed. Neither is dropped
+silently, and no figure averages a no-fix in as a number:
 
-* :func:`error_stats` computes every statistic over the finite errors and reports how
-  many were left out (``n_invalid``, beside ``n`` used);
+* :func:`error_stats` computes every statistic over the finite errors (the fixes), reports
+  how many were left out (``n_invalid``, beside ``n`` used) and the **availability**, the
+  share of realizations with a fix;
 * the per-node statistics (:func:`node_mean`, :func:`node_std`, :func:`node_rmse`) use a
   node's finite errors and give +inf for a node without any (its error is unbounded);
-* the cost statistics :data:`STATISTICS` give +inf as soon as one error is not finite:
-  a layout with a failed fix cannot be scored (the optimizers' convention).
+* the cost statistics :data:`STATISTICS` rank availability first (docs/model.md, "Costs
+  and availability"): the statistic of the fixes when every realization has a fix, else
+  :data:`NO_FIX_COST` · (1 + share without a fix) + the statistic of the fixes, so that
+  no layout with full availability loses to one without; +inf when an error is ±inf or
+  there is no error at all (a layout that cannot be scored).
 
-Range errors must be finite (the receiver always returns a range).
+Range errors are NaN where the receiver reported no range.
 """
 
 from __future__ import annotations
@@ -80,8 +85,9 @@ def error_stats(errors) -> dict[str, float | int]:
     Returns ``{"std", "mean", "p95", "rms", "median", "max", "n", "n_invalid"}``: ``std``
     is the population standard deviation (ddof = 0), the paper's σ (§V-B, Table I);
     ``mean`` the paper's μ; ``p95`` the 95th percentile (linear interpolation); ``rms`` =
-    √mean e². ``n`` counts the finite errors used and ``n_invalid`` the non-finite ones
-    left out (failed fixes); without any finite error every statistic is NaN.
+    √mean e². ``n`` counts the finite errors used, ``n_invalid`` the non-finite ones
+    left out (no fix, or a failed one) and ``availability`` = n / (n + n_invalid) (NaN
+    without errors); without any finite error every statistic is NaN.
     """
     e = checks.reals("errors", errors, finite=False).ravel()
     v = e[np.isfinite(e)]
@@ -99,6 +105,7 @@ def error_stats(errors) -> dict[str, float | int]:
         }
     out["n"] = int(v.size)
     out["n_invalid"] = int(e.size - v.size)
+    out["availability"] = v.size / e.size if e.size else math.nan
     return out
 
 
@@ -121,23 +128,39 @@ def _strict(name: str) -> Callable[[np.ndarray], float]:
 
 
 #: statistics of the simulated Euclidean errors (all R·P of them) usable as a cost, lower
-#: is better; each is +inf if some error is not finite or there is none. "variance" is
-#: the paper's cost (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
+#: is better, with availability first (module docstring). "variance" is the paper's cost
+#: (σ², m², §III-B); "mean", "p95" and "rms" are in metres.
 STATISTICS: dict[str, Callable[[np.ndarray], float]] = {k: _strict(k) for k in _REDUCTIONS}
+
+#: the cost of a layout with a no-fix: NO_FIX_COST · (1 + share without a fix) + the
+#: statistic of its fixes. Above any statistic of fixes: a least-squares fix started in a
+#: room of at most 100 m per side lies within a few hundred metres of it, so its error
+#: variance stays below 1e6 m²
+NO_FIX_COST = 1e12
 
 
 def row_statistics(name: str, errors) -> np.ndarray:
     """(L,) the cost statistic ``name`` of :data:`STATISTICS` of each row of errors (L, n)
-    at once: row l's value equals ``STATISTICS[name](errors[l])`` (+inf for a row with a
-    non-finite error, or for rows without errors)."""
+    at once: row l's value equals ``STATISTICS[name](errors[l])``. A row without a NaN
+    (no-fix) gets the statistic; a row with some gets :data:`NO_FIX_COST` · (1 + their
+    share) + the statistic of its finite errors (0 if none); a row with a ±inf error, or
+    rows without errors, get +inf."""
     checks.choice("statistic", name, tuple(_REDUCTIONS))
     e = np.asarray(errors, dtype=float)
     if e.ndim != 2:
         raise ValueError(f"errors: expected shape (L, n), got {e.shape}")
     out = np.full(len(e), math.inf)
-    ok = np.all(np.isfinite(e), axis=1) & (e.shape[1] > 0)
+    if e.shape[1] == 0:
+        return out
+    ok = np.all(np.isfinite(e), axis=1)
     if np.any(ok):
         out[ok] = _REDUCTIONS[name](e[ok], axis=1)
+    nofix = np.isnan(e)
+    partial = ~ok & ~np.any(np.isinf(e), axis=1)  # only NaN among the non-finite
+    for i in np.flatnonzero(partial):  # layouts, not nodes: few
+        fixes = e[i][~nofix[i]]
+        stat = float(_REDUCTIONS[name](fixes)) if fixes.size else 0.0
+        out[i] = NO_FIX_COST * (1.0 + nofix[i].mean()) + stat
     return out
 
 
@@ -189,17 +212,30 @@ def node_std(errors) -> np.ndarray:
 
 def range_std(range_errors) -> np.ndarray:
     """(P,) σ_r^p: mean over the anchors of the standard deviation over the realizations
-    of the range error, range_errors (R, P, M) in metres (paper §V-A)."""
-    r = checks.reals("range_errors", range_errors)
+    of the range error, range_errors (R, P, M) in metres (paper §V-A). Missing ranges
+    (NaN) are left out: each pair's σ is over its heard realizations, and the mean over
+    the anchors heard at least once (0 at a node that hears none)."""
+    r = checks.reals("range_errors", range_errors, finite=False)
     if r.ndim != 3 or 0 in r.shape:
         raise ValueError(f"range_errors: expected shape (R, P, M), none of them 0, got {r.shape}")
-    return np.mean(np.std(r, axis=0), axis=-1)
+    if np.any(np.isinf(r)):
+        raise ValueError("range_errors: must be finite or NaN (no range), got inf")
+    heard = ~np.isnan(r)
+    if np.all(heard):
+        return np.mean(np.std(r, axis=0), axis=-1)
+    n = heard.sum(axis=0)  # (P, M)
+    x = np.where(heard, r, 0.0)
+    mean = x.sum(axis=0) / np.maximum(n, 1)
+    var = np.where(heard, (x - mean) ** 2, 0.0).sum(axis=0) / np.maximum(n, 1)
+    seen = n > 0
+    total = np.where(seen, np.sqrt(var), 0.0).sum(axis=-1)
+    return total / np.maximum(seen.sum(axis=-1), 1)
 
 
 # -- dilution of precision ----------------------------------------------------------------------
 def _ratio(errors, range_errors, spread: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     e = checks.reals("errors", errors, finite=False)
-    r = checks.reals("range_errors", range_errors)
+    r = checks.reals("range_errors", range_errors, finite=False)
     if e.ndim != 2 or r.ndim != 3 or r.shape[:2] != e.shape:
         raise ValueError(
             "errors/range_errors: expected shapes (R, P) and (R, P, M), "

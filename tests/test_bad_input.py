@@ -15,7 +15,7 @@ import placement
 from analysis import figures
 from placement.cli import main
 from placement.pso import PSOOptions, pso
-from simulation import Chirp, Receiver, Room, evaluate_layout, locate, simulate_ranges
+from simulation import Chirp, Receiver, Room, Signal, evaluate_layout, locate, simulate_ranges
 from simulation.multipath import image_indices
 
 ROOM = Room.techtile()
@@ -228,7 +228,12 @@ def test_swarm_scores_collinear_layouts_inf():
 
 @pytest.mark.parametrize(
     ("ranges", "says"),
-    [(-2 * np.ones((2, 4)), ">= -1 m"), (np.full((2, 4), np.nan), "finite"), ("1 2", "numbers")],
+    [
+        (-2 * np.ones((2, 4)), "[-1, 100000] m"),
+        (np.full((2, 4), np.inf), "finite"),
+        (np.full((2, 4), 1e300), "[-1, 100000] m"),
+        ("1 2", "numbers"),
+    ],
 )
 def test_locate_refuses_impossible_ranges(ranges, says):
     assert says in refused("ranges", lambda: locate(A, ranges))
@@ -545,22 +550,20 @@ def test_a_checkpoint_in_a_new_folder_is_written(tmp_path):
     [
         (lambda: Receiver(window=33), "window"),  # the default high-pass pads by 33
         (lambda: Receiver(window=120, highpass_order=40), "window"),
-        (lambda: evaluate_layout(ROOM, A, nodes=NODES, receiver="r"), "receiver"),
-        (lambda: evaluate_layout(ROOM, A, nodes=NODES, chirp=Chirp(f0=1e6, f1=9e5)), "chirp"),
-        (
-            lambda: simulate_ranges(ROOM, A, NODES, receiver=Receiver(highpass_cutoff=1e-9)),
-            "highpass_cutoff",
-        ),
-        (lambda: analysis.PhysicalRangeNoise(ROOM, chirp="x"), "chirp"),
+        (lambda: Room(signal="r"), "signal"),
+        (lambda: Signal(Chirp(f0=1e6, f1=9e5)), "chirp"),
+        (lambda: Signal(receiver=Receiver(highpass_cutoff=1e-9)), "highpass_cutoff"),
+        (lambda: Signal(chirp="x"), "chirp"),
+        (lambda: Signal(receiver="x"), "receiver"),
     ],  # fmt: skip
 )
 def test_chirp_and_receiver_must_work_together(call, name):
     refused(name, call)
 
 
-def test_physical_noise_takes_none_for_the_default_chirp_and_receiver():
-    noise = analysis.PhysicalRangeNoise(ROOM, chirp=None, receiver=None)
-    assert noise.chirp == Chirp() and noise.receiver == Receiver()
+def test_physical_noise_uses_the_rooms_signal():
+    room = Room(signal=Signal(Chirp(duration=0.05), Receiver(t_wake=0.049)))
+    assert analysis.PhysicalRangeNoise(room).signal == room.signal
 
 
 @pytest.mark.parametrize("items", [5, True, 2.5])

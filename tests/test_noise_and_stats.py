@@ -72,18 +72,40 @@ def test_cost_statistics_are_inf_for_a_failed_fix():
     for name in ("mean", "p95", "rms"):
         assert STATISTICS[name](e) == pytest.approx(st[name])
     bad = e.copy()
-    bad[0, 0] = np.nan
+    bad[0, 0] = np.inf  # a failed fix: the layout cannot be scored
     assert all(STATISTICS[k](bad) == np.inf for k in STATISTICS)
+
+
+def test_a_no_fix_costs_more_than_any_layout_with_full_availability():
+    from simulation.statistics import NO_FIX_COST
+
+    fixed = np.array([[0.1, 0.2], [0.3, 0.4]])
+    worst = np.array([[500.0, 0.0], [0.0, 500.0]])  # a dreadful layout, but every node fixed
+    missing = fixed.copy()
+    missing[0, 0] = np.nan  # one node realization without a fix
+    more = missing.copy()
+    more[1, 1] = np.nan
+    for name in STATISTICS:
+        full, bad = STATISTICS[name](worst), STATISTICS[name](missing)
+        assert full < NO_FIX_COST < bad < STATISTICS[name](more)
+        # the rule: the statistic of the fixes on top of the penalty for the share missing
+        stat = STATISTICS[name](np.array([0.2, 0.3, 0.4]))
+        assert bad == pytest.approx(NO_FIX_COST * (1 + 1 / 4) + stat)
+    assert STATISTICS["mean"](np.full(3, np.nan)) == 2 * NO_FIX_COST  # no fix at all
+    st = analysis.error_stats(missing)
+    assert st["availability"] == 0.75 and st["n"] == 3 and st["n_invalid"] == 1
+    assert st["mean"] == pytest.approx(0.3)  # the fixes only: no no-fix averaged in
 
 
 def test_row_statistics_equal_the_statistic_of_each_row():
     rng = np.random.default_rng(3)
     e = np.abs(rng.standard_normal((7, 810))) * rng.uniform(0.1, 2.0, (7, 1))
-    e[2, 5] = np.nan  # a failed fix: that row only is +inf
-    e[4, 0] = np.inf
+    e[2, 5] = np.nan  # no fix: that row is penalized
+    e[4, 0] = np.inf  # a failed fix: that row only is +inf
     for name in STATISTICS:
         rows = row_statistics(name, e)
-        assert rows.shape == (7,) and np.isinf(rows[[2, 4]]).all()
+        assert rows.shape == (7,) and np.isinf(rows[4]) and np.isfinite(rows[2])
+        assert rows[2] > max(np.delete(rows, [2, 4]))
         # equal, not approximately: the search's choices must not depend on the batching
         np.testing.assert_array_equal(rows, [STATISTICS[name](r) for r in e])
     assert row_statistics("variance", e[:0]).shape == (0,)

@@ -95,8 +95,9 @@ def test_bad_input():
     a = ROOM.corners_layout()
     with pytest.raises(ValueError, match="ranges"):
         locate(a, np.full((5, 3), 1.0))
-    with pytest.raises(ValueError, match="ranges"):
-        locate(a, np.array([[1.0, np.nan, 2.0, 3.0]]))
+    for bad in (np.inf, 1e300):
+        with pytest.raises(ValueError, match="ranges"):
+            locate(a, np.array([[1.0, bad, 2.0, 3.0]]))
     with pytest.raises(ValueError, match="anchors"):
         locate(a[:2], np.ones((1, 2)))
     with pytest.raises(ValueError, match="max_iter"):
@@ -158,3 +159,39 @@ def test_one_compiled_loop_for_every_caller():
     boxed = locate(a, ranges, region=REGION, bounded=True)
     assert len(positioning._lm_rows.signatures) == 1
     assert np.all(np.isfinite(free)) and np.all(np.isfinite(boxed))
+
+
+def test_missing_ranges_equal_locating_from_the_heard_anchors():
+    """A NaN range is an anchor not heard: the node is solved from the others alone, as if
+    only they had been given; fewer than 4 heard (or collinear ones) give no fix."""
+    rng = np.random.default_rng(1)
+    room = Room.techtile()
+    a = rng.uniform(0, room.size, (8, 3))
+    p = rng.uniform(0, room.size, (300, 3))
+    r = np.linalg.norm(p[:, None] - a[None], axis=-1) + rng.normal(0, 0.05, (300, 8))
+    missing = rng.random((300, 8)) < 0.35
+    for region in ((np.zeros(3), np.array(room.size)), None):
+        fix = locate(a, np.where(missing, np.nan, r), region=region, full_output=True)
+        solved = 0
+        for i in range(len(p)):
+            heard = ~missing[i]
+            if heard.sum() < 4:
+                assert fix.status[i] == -2 and np.isnan(fix.x[i]).all() and not fix.converged[i]
+                continue
+            alone = locate(a[heard], r[i : i + 1, heard], region=region, full_output=True)
+            np.testing.assert_allclose(fix.x[i], alone.x[0], atol=1e-7)
+            assert fix.status[i] > 0 and alone.status[0] > 0
+            solved += 1
+        assert 100 < solved < 300  # both kinds of node were exercised
+
+
+def test_missing_ranges_with_collinear_heard_anchors_give_no_fix():
+    line = np.array([[1.0, 2.0, 2.37], [3.0, 2.0, 2.37], [5.0, 2.0, 2.37], [7.0, 2.0, 2.37]])
+    a = np.vstack([line, [[4.0, 0.03, 1.0]]])
+    p = np.array([[4.0, 1.0, 1.2]])
+    r = np.linalg.norm(p[:, None] - a[None], axis=-1)
+    r[0, 4] = np.nan  # the only anchor off the line is not heard
+    fix = locate(a, r, full_output=True)
+    assert fix.status[0] == -2 and np.isnan(fix.x).all()
+    r[0, 4] = np.linalg.norm(p[0] - a[4])
+    assert locate(a, r, full_output=True).status[0] > 0

@@ -145,10 +145,11 @@ def test_report_from_result_json_with_simulator(tmp_path, monkeypatch):
     assert path == tmp_path / "report.html"
     text = path.read_text()
     c = check_html(text)
-    assert len(c.imgs) == len(rep.figures) == 9
+    assert len(c.imgs) == len(rep.figures) == 10
     titles = " | ".join(rep.figures)
-    for want in ("Plan view", "PEB map", "PEB at the evaluation nodes", "RMSE", "Error CDFs",
-                 "Bound vs", "DOP difference", "Layouts", "PSO evolution"):  # fmt: skip
+    wanted = ("Plan view", "Coverage", "PEB map", "PEB at the evaluation nodes", "RMSE",
+              "Error CDFs", "Bound vs", "DOP difference", "Layouts", "PSO evolution")  # fmt: skip
+    for want in wanted:
         assert want in titles
     names = [e.name for e in rep.layouts]
     assert names == ["optimized", "naive", "corners", "seed relax-A", "seed relax-D"]
@@ -276,10 +277,10 @@ def test_cli_report_with_the_real_simulator(tmp_path, capsys):
     assert main([*argv, "--figures", str(tmp_path / "figs")]) == 0
     assert f"wrote {out}" in capsys.readouterr().out
     c = check_html(out.read_text())
-    assert len(c.imgs) == 9
+    assert len(c.imgs) == 10
     assert out.stat().st_size < 1_500_000
     pngs = sorted((tmp_path / "figs").glob("*.png"))
-    assert len(pngs) == 9 and pngs[0].name == "01-plan-view-of-the-optimized-layout.png"
+    assert len(pngs) == 10 and pngs[0].name == "01-plan-view-of-the-optimized-layout.png"
     # the CLI compares with the naive layout of the same M, simulated here
     body = "".join(c.text)
     assert "σ of the naive layout" in body and "σ of the corners layout" in body

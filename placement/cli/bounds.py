@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from analysis import error_stats, peb
+from analysis import error_stats, heard_sigma, peb
 from analysis.noise import SIGMA_RANGE
 from placement.cli.common import add_room_argument, load_layout, load_room, output_file, write_json
 from simulation import checks
@@ -32,14 +32,14 @@ def run(args) -> int:
     room = load_room(args.room)
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()
-    values = peb(anchors, nodes, sigma=args.sigma)
+    values = peb(anchors, nodes, sigma=heard_sigma(room, anchors, nodes, args.sigma))
     stats = error_stats(values)
     print(f"room {room.name} {room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m")
     print(f"{len(anchors)} anchors, {len(nodes)} nodes, range sigma {args.sigma:g} m")
     geometry = checks.geometry(anchors)
     if geometry != "3d":
         print(f"note: the anchors are {geometry}")
-    print("PEB = sqrt(tr J^-1) in metres over the grid:")
+    print("PEB = sqrt(tr J^-1) in metres over the grid, from the anchors each node hears:")
     if stats["n"] == 0:  # no statistic of an empty set: say what the bound is
         print(f"  infinite at all {len(nodes)} nodes (singular nodes {stats['n_invalid']})")
     else:

@@ -7,6 +7,10 @@ from pathlib import Path
 
 from placement.cli.common import (
     add_room_argument,
+    add_signal_arguments,
+    apply_signal,
+    availability_note,
+    describe_signal,
     load_layout,
     load_room,
     output_dir,
@@ -34,6 +38,7 @@ def register(sub) -> None:
         "--snr", type=float, default=30.0, help="SNR in dB at each anchor's closest node (30)"
     )
     p.add_argument("--out", metavar="DIR", required=True, help="output folder")
+    add_signal_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -47,7 +52,7 @@ def run(args) -> int:
     checks.count("--realizations", args.realizations, low=1)
     checks.count("--seed", args.seed, low=0)
     check_snr("--snr", args.snr)
-    room = load_room(args.room)
+    room = apply_signal(args, load_room(args.room))
     anchors = load_layout(args.layout, room)
     checks.check_size(
         "--realizations",
@@ -69,10 +74,12 @@ def run(args) -> int:
         f"{len(anchors)} anchors, {len(ev.nodes)} nodes, {ev.realizations} realization(s), "
         f"seed {args.seed}, SNR {ev.snr_db:g} dB, {seconds:.1f} s"
     )
-    print("Euclidean position error in metres over all nodes and realizations:")
+    print(describe_signal(room))
+    print("Euclidean position error in metres over the fixes of all nodes and realizations:")
     print(
         f"  std {st['std']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}  "
         f"rms {st['rms']:.4f}  median {st['median']:.4f}  max {st['max']:.4f}"
+        + availability_note(st)
     )
     if ev.geometry != "3d":
         print(f"  the anchors are {ev.geometry}: positions may be ambiguous (see anchor_geometry)")

@@ -6,7 +6,16 @@ import contextlib
 import re
 import time
 
-from placement.cli.common import add_room_argument, load_room, output_dir, write_json
+from placement.cli.common import (
+    add_room_argument,
+    add_signal_arguments,
+    apply_signal,
+    availability_note,
+    describe_signal,
+    load_room,
+    output_dir,
+    write_json,
+)
 from placement.costs import COST_NAMES
 from placement.workers import available_cores
 from simulation import checks
@@ -85,6 +94,7 @@ def register(sub) -> None:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--out", metavar="DIR", default="anchorplan-out", help="output folder")
+    add_signal_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -171,16 +181,17 @@ def _check_args(args, room):
     search = _search_options(args)
     M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
     if not args.no_seeds and args.cost != "peb":
-        n = len(candidate_grid(room, search.spacing))
+        spacing = search.spacing_for(room)
+        n = len(candidate_grid(room, spacing))
         if n > MAX_SEARCH_CANDIDATES:
             raise ValueError(
-                f"--search-spacing: {search.spacing:g} m gives {n} candidate points, more "
+                f"--search-spacing: {spacing:g} m gives {n} candidate points, more "
                 f"than {MAX_SEARCH_CANDIDATES}; use a larger spacing"
             )
         if M > n:
             raise ValueError(
                 f"--anchors: {M} anchors exceed the {n} candidate points of the search "
-                f"(--search-spacing {search.spacing:g} m) in this room"
+                f"(--search-spacing {spacing:g} m) in this room"
             )
     checks.check_size(
         "--validate-realizations",
@@ -206,7 +217,7 @@ def run(args) -> int:
     from placement.pso import default_eval_timeout
 
     out = output_dir("--out", args.out)
-    room = load_room(args.room)
+    room = apply_signal(args, load_room(args.room))
     search = _check_args(args, room)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
@@ -218,6 +229,7 @@ def run(args) -> int:
             f"seed {args.seed}, {workers if executor is not None else 1} worker(s)",
             flush=True,
         )
+        print(describe_signal(room), flush=True)
         with default_eval_timeout(args.eval_timeout):
             res = seed_then_pso(
                 room,
@@ -289,6 +301,7 @@ def _print_validation(v: dict) -> None:
     print(
         f"validation, {v['realizations']} realizations at the {len(v['per_node']['rmse'])} "
         f"nodes: sigma {v['std']:.3f} m, mean {v['mean']:.3f} m, P95 {v['p95']:.3f} m"
+        + availability_note(v)
     )
     h = v.get("held_out")
     if h:
@@ -296,13 +309,14 @@ def _print_validation(v: dict) -> None:
             d = h[key]
             print(
                 f"  {what} ({d['nodes']} nodes): sigma {d['std']:.3f} m, mean {d['mean']:.3f} m, "
-                f"P95 {d['p95']:.3f} m"
+                f"P95 {d['p95']:.3f} m" + availability_note(d)
             )
     m = v.get("mounting")
     if m:
         print(
             f"  mounting error <= {100 * m['tolerance_m']:g} cm ({m['draws']} draws): "
             f"sigma {m['std']:.3f} m, mean {m['mean']:.3f} m, P95 {m['p95']:.3f} m"
+            + availability_note(m)
         )
 
 

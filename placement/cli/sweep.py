@@ -6,7 +6,15 @@ import contextlib
 import re
 import time
 
-from placement.cli.common import add_room_argument, load_room, output_dir, write_json
+from placement.cli.common import (
+    add_room_argument,
+    add_signal_arguments,
+    apply_signal,
+    describe_signal,
+    load_room,
+    output_dir,
+    write_json,
+)
 from placement.cli.plan import _executor
 from placement.workers import available_cores
 from simulation import checks
@@ -23,6 +31,13 @@ def register(sub) -> None:
     )
     p.add_argument("--anchors", "-M", default="4-10", help="anchor counts, e.g. 4-10 or 4,6,8")
     p.add_argument("--target-p95", type=float, metavar="M", help="P95 to meet, m")
+    p.add_argument(
+        "--target-availability",
+        type=float,
+        default=0.99,
+        metavar="A",
+        help="share of node realizations with a fix to reach (0.99)",
+    )
     add_room_argument(p)
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument("--workers", type=int, default=0, help="worker processes (0: one per core)")
@@ -31,6 +46,7 @@ def register(sub) -> None:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--out", metavar="DIR", default="anchorplan-sweep", help="output folder")
+    add_signal_arguments(p)
     p.set_defaults(func=run, scheduler=None, eval_timeout=None)
 
 
@@ -58,10 +74,11 @@ def run(args) -> int:
     from placement.anchor_sweep import sweep
 
     out = output_dir("--out", args.out)
-    room = load_room(args.room)
+    room = apply_signal(args, load_room(args.room))
     counts = [checks.count("--anchors", m, low=4, high=100) for m in parse_counts(args.anchors)]
     if args.target_p95 is not None:
         checks.real("--target-p95", args.target_p95, low=0.0, low_open=True, unit="m")
+    checks.real("--target-availability", args.target_availability, low=0.0, high=1.0, low_open=True)
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=1024)
     checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
@@ -70,11 +87,13 @@ def run(args) -> int:
         executor = _executor(args, stack)
         workers = (args.workers or available_cores()) if executor is not None else 1
         print(f"sweeping M = {counts} in {room.name}, seed {args.seed}", flush=True)
+        print(describe_signal(room), flush=True)
 
         def report(M, row):
             print(
                 f"  M = {M:2d}: sigma {row.std:.3f} m, mean {row.mean:.3f} m, "
-                f"P95 {row.p95:.3f} m ({row.seconds:.0f} s)",
+                f"P95 {row.p95:.3f} m, availability {100 * row.availability:.2f} % "
+                f"({row.seconds:.0f} s)",
                 flush=True,
             )
 
@@ -82,6 +101,7 @@ def run(args) -> int:
             room,
             counts,
             target_p95=args.target_p95,
+            target_availability=args.target_availability,
             rng=args.seed,
             executor=executor,
             workers=workers,
@@ -101,7 +121,7 @@ def run(args) -> int:
 
 
 def _print_table(res, paper) -> None:
-    head = " M   sigma    mean     P95   held-out sigma  mounting sigma"
+    head = " M   sigma    mean     P95  availability  held-out sigma  mounting sigma"
     print(head + ("   paper sigma/mean/P95" if paper else ""))
     for r in res.rows:
         ref = ""
@@ -109,12 +129,13 @@ def _print_table(res, paper) -> None:
             p = paper[r.M]
             ref = f"   {p['std']:.3f}/{p['mean']:.3f}/{p['p95']:.3f}"
         print(
-            f"{r.M:2d}  {r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}   {r.held_out_std:13.3f}"
-            f"  {r.mounting_std:14.3f}{ref}"
+            f"{r.M:2d}  {r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}  {100 * r.availability:10.2f} %"
+            f"  {r.held_out_std:14.3f}  {r.mounting_std:14.3f}{ref}"
         )
-    if res.target_p95 is None:
-        print("no --target-p95: no recommendation")
-    elif res.recommended is None:
-        print(f"no M in the sweep meets P95 <= {res.target_p95:g} m")
+    goal = f"availability >= {100 * res.target_availability:g} %"
+    if res.target_p95 is not None:
+        goal += f" and P95 <= {res.target_p95:g} m"
+    if res.recommended is None:
+        print(f"no M in the sweep reaches {goal}")
     else:
-        print(f"recommended: M = {res.recommended} (smallest with P95 <= {res.target_p95:g} m)")
+        print(f"recommended: M = {res.recommended} (smallest with {goal})")

@@ -1,0 +1,55 @@
+"""Coverage: how many anchors a tag hears, and where fewer than 4 leave it without a fix.
+
+A node hears anchor j when the receiver would report a range of it
+(:meth:`analysis.noise.PhysicalRangeNoise.heard`, docs/model.md, "Coverage"): the direct
+path lies within the signal's reach (and beyond its near limit) and, for a receiver with a
+detection threshold, the direct path's expected correlation peak clears it at the SNR
+rule's noise level. A position fix needs 4 heard anchors (:mod:`simulation.positioning`).
+This is the geometry of the signal design, from the direct path alone; the simulated
+availability (``Evaluation.availability``) also counts the noise. :func:`heard_sigma` gives
+the bounds (PEB maps, the report) the same view: an anchor not heard carries no
+information.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from analysis.noise import PhysicalRangeNoise
+from simulation import checks
+from simulation.noise import DEFAULT_SNR_DB
+from simulation.positioning import MIN_HEARD
+from simulation.room import Room, as_room
+
+
+def heard(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> np.ndarray:
+    """(..., P, M) bool: node p hears anchor j (module docstring); anchors (..., M, 3),
+    nodes (P, 3) in metres."""
+    room = as_room(room)
+    a = checks.reals("anchors", anchors)
+    if a.ndim < 2 or a.shape[-1] != 3:
+        raise ValueError(f"anchors: expected shape (..., M, 3), got {a.shape}")
+    p = checks.points("nodes", nodes)
+    return PhysicalRangeNoise(room, snr_db=snr_db).heard(a, p)
+
+
+def coverage(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> np.ndarray:
+    """(..., P) the number of anchors each node hears (:func:`heard`)."""
+    return np.sum(heard(room, anchors, nodes, snr_db), axis=-1)
+
+
+def covered_share(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> float:
+    """The share of the nodes that hear at least 4 anchors (:data:`MIN_HEARD`)."""
+    return float(np.mean(coverage(room, anchors, nodes, snr_db) >= MIN_HEARD))
+
+
+def heard_sigma(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_SNR_DB):
+    """(..., P, M) the range σ (m; a scalar or anything broadcasting to (..., P, M)) where
+    node p hears anchor j, +inf (no information, :func:`analysis.fim.fim`) where it does
+    not: the bound then counts only the anchors the receiver reports."""
+    h = heard(room, anchors, nodes, snr_db)
+    s = np.broadcast_to(np.asarray(sigma, dtype=float), h.shape)
+    return np.where(h, s, np.inf)
+
+
+__all__ = ["coverage", "covered_share", "heard", "heard_sigma"]
