@@ -403,7 +403,9 @@ def coverage_map(
     n = len(heights)
     ncols = 1 if n == 1 else 2 if n <= 4 else 3
     nrows = math.ceil(n / ncols)
-    fig = new_figure((5.2 * ncols + 1.2, 3.0 * nrows + 0.8) if n > 1 else (7.0, 4.2), dpi)
+    aspect = L[1] / L[0]  # panels as tall as the room is deep
+    panel = (5.2, 5.2 * aspect + 1.2)
+    fig = new_figure((panel[0] * ncols + 1.2, panel[1] * nrows + 0.8), dpi)
     axs = fig.subplots(nrows, ncols, squeeze=False).ravel()
     cmap = matplotlib.colormaps["viridis"].resampled(M + 1)
     norm = mcolors.BoundaryNorm(np.arange(-0.5, M + 1.5), M + 1)

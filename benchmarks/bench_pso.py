@@ -43,6 +43,7 @@ def _summary(v: dict) -> dict:
         "std": v["std"],
         "mean": v["mean"],
         "p95": v["p95"],
+        "availability": v.get("availability"),
         "held_out": v.get("held_out"),
         "mounting": v.get("mounting"),
     }
@@ -108,6 +109,7 @@ def _emit(r: dict) -> None:
         std=v["std"],
         mean=v["mean"],
         p95=v["p95"],
+        availability=v.get("availability"),
         held_out_grid_std=(h.get("grid") or {}).get("std"),
         held_out_random_std=(h.get("random") or {}).get("std"),
         mounting_std=m.get("std"),

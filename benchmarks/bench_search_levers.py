@@ -54,6 +54,7 @@ def run(room, M, seed, table, options, ex, workers, cost="variance") -> dict:
         std=v["std"],
         mean=v["mean"],
         p95=v["p95"],
+        availability=v.get("availability"),
         held_out_grid_std=v["held_out"]["grid"]["std"],
         held_out_random_std=v["held_out"]["random"]["std"],
         mounting_std=v["mounting"]["std"],

@@ -145,6 +145,12 @@ class PlacementResult(LayoutResult):
     pso: PSOResult | None = field(default=None, repr=False)
     finalists: list[dict[str, Any]] = field(default_factory=list)
 
+    @property
+    def availability(self) -> float:
+        """The validated share of node realizations with a position fix at the evaluation
+        nodes (NaN without a validation); 1 − it is the share of the zone without a fix."""
+        return float((self.validation or {}).get("availability", math.nan))
+
     def to_dict(self) -> dict[str, Any]:
         """The plan as plain JSON types (``kind`` "plan"); :meth:`from_dict` reads it back."""
         return {

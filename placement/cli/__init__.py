@@ -32,6 +32,7 @@ class _Warnings(logging.Handler):
     def __init__(self, command: str):
         super().__init__(logging.INFO)
         self.command = command
+        self.seen: set[str] = set()  # a sweep plans many times: say each warning once
 
     def emit(self, record: logging.LogRecord) -> None:
         if record.levelno < logging.WARNING and not record.name.startswith("placement.pso"):
@@ -41,6 +42,10 @@ class _Warnings(logging.Handler):
             text = record.getMessage().replace("\n", " ")
         except Exception:  # noqa: BLE001 - a bad log call must not end the run
             text = str(record.msg)
+        if kind == "warning":
+            if text in self.seen:
+                return
+            self.seen.add(text)
         print(f"anchorplan {self.command}: {kind}: {text}", file=sys.stderr, flush=True)
 
 
