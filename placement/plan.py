@@ -655,14 +655,13 @@ def reach_check(room: Room, nodes=None) -> dict[str, Any]:
     (default ``room.grid()``) and the allowed mounting points. Logs a warning when the
     room is larger than the reach (or a node nearer a mounting point than the near limit):
     anchors that far give no range, and nodes may be left without a fix."""
-    from placement.surfaces import allowed_rectangles
+    from placement.surfaces import project, rectangle_corners
 
     grid = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
-    lo, hi, _ = allowed_rectangles(room)
-    # the farthest point of a box from a node is one of its corners, the nearest its clip
-    corners = np.stack([np.where(np.array(c, dtype=bool), hi, lo) for c in np.ndindex(2, 2, 2)])
-    far = np.max(np.linalg.norm(grid[:, None, None] - corners[None], axis=-1))
-    near = np.linalg.norm(grid[:, None] - np.clip(grid[:, None], lo, hi), axis=-1).min()
+    # the farthest point of a rectangle from a node is one of its corners
+    corners = rectangle_corners(room).reshape(-1, 3)
+    far = np.max(np.linalg.norm(grid[:, None] - corners[None], axis=-1))
+    near = np.linalg.norm(grid - project(room, grid), axis=-1).min()
     out = {
         "reach_m": room.reach,
         "near_limit_m": room.near_limit,

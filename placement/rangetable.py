@@ -123,6 +123,8 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
     return out
 
 
+_X, _Y = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+
 #: the most draws a range table holds
 MAX_TABLE_DRAWS = 1000
 
@@ -152,9 +154,10 @@ def mounted_points(
     for row, (j, s) in enumerate(zip(ids, index, strict=True)):
         u1, u2 = checks.stream(seed, 2, int(j), draw).random(2)
         radius, angle = tolerance * np.sqrt(u1), 2 * np.pi * u2
-        uv = surfs[int(s)].uv_axes if s >= 0 else (0, 1)
-        out[row, uv[0]] += radius * np.cos(angle)
-        out[row, uv[1]] += radius * np.sin(angle)
+        eu, ev = (surfs[int(s)].u_axis, surfs[int(s)].v_axis) if s >= 0 else (_X, _Y)
+        out[row] += radius * np.cos(angle) * np.asarray(eu) + radius * np.sin(angle) * np.asarray(
+            ev
+        )
     return project(room, out)
 
 

@@ -258,11 +258,12 @@ def _variables(room: Room, a0: np.ndarray):
     c0 = np.zeros(3 * M)
     lbx, ubx = np.empty(2 * M), np.empty(2 * M)
     for j, k in enumerate(idx):
-        sf = surfs[k]
-        c0[3 * j + sf.axis] = sf.offset
-        C[3 * j + sf.uv_axes[0], 2 * j] = C[3 * j + sf.uv_axes[1], 2 * j + 1] = 1.0
+        o, eu, ev = surfs[k].frame
+        c0[3 * j : 3 * j + 3] = o
+        C[3 * j : 3 * j + 3, 2 * j] = eu
+        C[3 * j : 3 * j + 3, 2 * j + 1] = ev
         # the largest allowed rectangle of its surface holding the start, else the nearest
-        lo, hi = rlo[ridx == k][:, sf.uv_axes], rhi[ridx == k][:, sf.uv_axes]
+        lo, hi = rlo[ridx == k], rhi[ridx == k]
         gap = np.linalg.norm(np.clip(uv[j], lo, hi) - uv[j], axis=-1)
         r = int(np.argmax(gap <= 1e-6)) if np.any(gap <= 1e-6) else int(np.argmin(gap))
         lbx[2 * j : 2 * j + 2], ubx[2 * j : 2 * j + 2] = lo[r], hi[r]

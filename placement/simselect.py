@@ -192,10 +192,11 @@ def fine_points(room: Room, anchors: np.ndarray, spacing: float, steps: int) -> 
     du, dv = np.meshgrid(offs, offs, indexing="ij")
     out = []
     for a, s in zip(anchors, surface_index(room, anchors), strict=True):
-        uv = surfs[int(s)].uv_axes if s >= 0 else (0, 1)
+        eu, ev = (surfs[int(s)].u_axis, surfs[int(s)].v_axis) if s >= 0 else ((1, 0, 0), (0, 1, 0))
         p = np.repeat(a[None], du.size, axis=0)
-        p[:, uv[0]] += du.ravel()
-        p[:, uv[1]] += dv.ravel()
+        p += du.ravel()[:, None] * np.asarray(eu, float) + dv.ravel()[:, None] * np.asarray(
+            ev, float
+        )
         out.append(project(room, p))
     return np.concatenate(out)
 

@@ -1,30 +1,33 @@
 """Mounting surfaces: where anchors may go, and the projection back onto them (paper §II).
 
-Each allowed surface is an axis-aligned rectangle ``anchor_offset`` off its plane and at
-least ``anchor_offset`` in from the neighbouring planes. A point on a surface is written
-(surface index, u, v) with u, v the two in-plane coordinates in increasing axis order
-(ceiling: u = x, v = y; south/north: u = x, v = z; west/east: u = y, v = z).
+The surfaces themselves (frames, outer rectangles, allowed regions) are
+:mod:`simulation.mounting`'s: planes ``anchor_offset`` off the walls, the ceiling (or floor)
+and the faces of mountable obstacles, each with in-plane coordinates (u, v). A point on a
+surface is written (surface index, u, v); for a shoebox u, v are the two in-plane
+coordinates in increasing axis order (ceiling: u = x, v = y; south/north: u = x, v = z;
+west/east: u = y, v = z), for a polygonal room's wall u runs along it.
 
-Keep-outs (``room.keepouts``): an anchor at p is forbidden iff p lies in a keep-out box,
-faces included (:func:`allowed`). The allowed region of a surface is its rectangle minus
-the footprints of the boxes its plane cuts, written as a union of allowed rectangles
-(:func:`allowed_rectangles`) that stop 1 µm (:data:`simulation.regions.EPS`) outside every
-box; :func:`project`, :func:`candidate_grid` and :func:`random_layout` only return points of
-those rectangles or, for the grid, points outside every box. ``surface_index``,
-``on_surfaces``, ``to_uv`` and ``from_uv`` describe the whole rectangles (geometry only).
+Keep-outs (``room.keepouts``) and obstacles: an anchor at p is forbidden iff p lies in a
+keep-out box (faces included) or outside the room (:func:`allowed`). The allowed region of
+a surface is its rectangle minus what its plane cuts of those boxes (and, on the ceiling
+of a polygonal room, the part outside the floor plan), written as a union of allowed
+rectangles (:func:`allowed_rectangles`) that stop 1 µm
+(:data:`simulation.regions.EPS`) outside every box; :func:`project`,
+:func:`candidate_grid` and :func:`random_layout` only return points of those rectangles
+or, for the grid, points outside every box. ``surface_index``, ``on_surfaces``, ``to_uv``
+and ``from_uv`` describe the whole rectangles (geometry only).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from simulation import checks
 from simulation.directivity import aim_vectors
-from simulation.regions import footprints, free_cells, maximal_rectangles
-from simulation.room import SURFACES, Room, as_room
+from simulation.mounting import MountingSurface, mounting_surfaces, regions
+from simulation.room import Room, as_room
 
 #: most candidate points :func:`candidate_grid` makes, and most anchors of a random layout
 MAX_CANDIDATES, MAX_LAYOUT_ANCHORS = 1_000_000, 100_000
@@ -32,137 +35,82 @@ MAX_CANDIDATES, MAX_LAYOUT_ANCHORS = 1_000_000, 100_000
 #: the most anchors a plan places: the bound on M of the swarm, the search and the plan
 MAX_ANCHORS = 100
 
+__all__ = ["MountingSurface", "mounting_surfaces"]
 
-@dataclass(frozen=True)
-class MountingSurface:
-    """An allowed rectangle: ``axis`` fixed at ``offset``, in-plane axes ``uv_axes``."""
-
-    name: str
-    axis: int
-    offset: float
-    uv_axes: tuple[int, int]
-    lower: tuple[float, float]
-    upper: tuple[float, float]
-
-    @property
-    def area(self) -> float:
-        """Area of the rectangle in m²."""
-        return (self.upper[0] - self.lower[0]) * (self.upper[1] - self.lower[1])
-
-    def point(self, uv) -> np.ndarray:
-        """(..., 3) points from in-plane coordinates (..., 2)."""
-        uv = np.asarray(uv, dtype=float)
-        out = np.empty((*uv.shape[:-1], 3))
-        out[..., self.axis] = self.offset
-        out[..., self.uv_axes[0]] = uv[..., 0]
-        out[..., self.uv_axes[1]] = uv[..., 1]
-        return out
-
-
-def mounting_surfaces(room: Room) -> tuple[MountingSurface, ...]:
-    """The room's allowed mounting rectangles, in the order of ``room.mounting``."""
-    room = as_room(room)
-    o = room.anchor_offset
-    out = []
-    for name in room.mounting:
-        axis, side = SURFACES[name]
-        uv = tuple(k for k in range(3) if k != axis)
-        out.append(
-            MountingSurface(
-                name=name,
-                axis=axis,
-                offset=o if side == 0 else room.size[axis] - o,
-                uv_axes=uv,
-                lower=(o, o),
-                upper=(room.size[uv[0]] - o, room.size[uv[1]] - o),
-            )
-        )
-    return tuple(out)
-
-
-def _bounds(room: Room) -> tuple[np.ndarray, np.ndarray]:
-    """(S, 3) lower and upper corners of the surfaces (equal on the fixed axis)."""
-    surfs = mounting_surfaces(room)
-    lo = np.empty((len(surfs), 3))
-    hi = np.empty((len(surfs), 3))
-    for i, s in enumerate(surfs):
-        lo[i, s.axis] = hi[i, s.axis] = s.offset
-        for k, a in enumerate(s.uv_axes):
-            lo[i, a], hi[i, a] = s.lower[k], s.upper[k]
-    return lo, hi
-
-
-def _to3d(s: MountingSurface, lo2: np.ndarray, hi2: np.ndarray):
-    lo = np.empty((len(lo2), 3))
-    hi = np.empty((len(lo2), 3))
-    lo[:, s.axis] = hi[:, s.axis] = s.offset
-    for k, a in enumerate(s.uv_axes):
-        lo[:, a], hi[:, a] = lo2[:, k], hi2[:, k]
-    return lo, hi
-
-
-#: (size, mounting, anchor_offset, keepouts) -> the result of _compute_regions
+#: a room's geometry -> the result of simulation.mounting.regions
 _REGIONS: dict = {}
 
 
-def _compute_regions(room: Room):
-    """Read-only (cells, rectangles), each (lower (n, 3), upper (n, 3), surface index (n,))."""
-    out = {"cells": ([], [], []), "rects": ([], [], [])}
-    for i, s in enumerate(mounting_surfaces(room)):
-        blocks = footprints(room.keepouts, s.axis, s.offset, s.uv_axes)
-        for key, fn in (("cells", free_cells), ("rects", maximal_rectangles)):
-            lo2, hi2 = fn(s.lower, s.upper, blocks)
-            lo, hi = _to3d(s, lo2, hi2)
-            out[key][0].append(lo)
-            out[key][1].append(hi)
-            out[key][2].append(np.full(len(lo), i))
-    res = []
-    for key in ("cells", "rects"):
-        arrays = tuple(np.concatenate(a) for a in out[key])
-        for a in arrays:
-            a.setflags(write=False)
-        res.append(arrays)
-    return tuple(res)
+def _key(room: Room):
+    obstacles = tuple((ob.lo, ob.hi, ob.mountable) for ob in room.obstacles)
+    return (room.size, room.corners, room.wall_names, room.mounting, room.anchor_offset,
+            room.keepouts, obstacles)  # fmt: skip
 
 
 def _room_regions(room: Room):
+    """Read-only (cells, rectangles) of the room, each (lower (n, 2), upper (n, 2),
+    surface (n,)) in the surfaces' (u, v)."""
     room = as_room(room)
-    key = (room.size, room.mounting, room.anchor_offset, room.keepouts)
-    regions = _REGIONS.get(key)
-    if regions is None:
+    key = _key(room)
+    out = _REGIONS.get(key)
+    if out is None:
         if len(_REGIONS) >= 64:
             _REGIONS.clear()
-        regions = _REGIONS[key] = _compute_regions(room)
-    return regions
+        out = _REGIONS[key] = regions(room)
+    return out
+
+
+def _frames(room: Room, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(origins (n, 3), in-plane axes (n, 2, 3)) of the surfaces with indices (n,)."""
+    surfs = mounting_surfaces(room)
+    o = np.array([s.origin for s in surfs], dtype=float)
+    e = np.array([[s.u_axis, s.v_axis] for s in surfs], dtype=float)
+    return o[index], e[index]
 
 
 def allowed_rectangles(room: Room) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The allowed mounting region as rectangles: (lower (R, 3), upper (R, 3), surface (R,)).
+    """The allowed mounting region as rectangles: (lower (R, 2), upper (R, 2), surface (R,))
+    in the (u, v) of each surface.
 
     Per surface (in the order of :func:`mounting_surfaces`, ``surface`` its index) the
-    maximal rectangles of its rectangle minus the keep-out footprints, largest first; they
-    may overlap and stop 1 µm outside every keep-out. Without keep-outs: one rectangle per
-    surface, the surface itself.
+    maximal rectangles of its allowed region, largest first; they may overlap and stop
+    1 µm outside every keep-out. Without keep-outs, obstacles or a floor plan: one
+    rectangle per surface, the surface itself.
     """
     lo, hi, idx = _room_regions(room)[1]
     return lo.copy(), hi.copy(), idx.copy()
 
 
+def rectangle_corners(room: Room) -> np.ndarray:
+    """(R, 4, 3) the corners of every allowed rectangle in room coordinates (m)."""
+    lo, hi, idx = _room_regions(room)[1]
+    o, e = _frames(room, idx)
+    uv = np.stack([lo, np.stack([hi[:, 0], lo[:, 1]], 1), hi, np.stack([lo[:, 0], hi[:, 1]], 1)],
+                  axis=1)  # fmt: skip
+    return o[:, None] + uv[..., 0, None] * e[:, None, 0] + uv[..., 1, None] * e[:, None, 1]
+
+
 def allowed_area(room: Room) -> np.ndarray:
-    """(S,) allowed mounting area (m²) of each surface: its rectangle minus the keep-outs."""
+    """(S,) allowed mounting area (m²) of each surface: its rectangle minus the keep-outs,
+    obstacles and (a polygonal room's ceiling) the outside of the floor plan."""
     lo, hi, idx = _room_regions(room)[0]
-    out = np.zeros(len(room.mounting))
-    for i, s in enumerate(mounting_surfaces(room)):
+    out = np.zeros(len(mounting_surfaces(room)))
+    for i in range(len(out)):
         d = (hi - lo)[idx == i]
-        out[i] = np.sum(d[:, s.uv_axes[0]] * d[:, s.uv_axes[1]])
+        out[i] = np.sum(d[:, 0] * d[:, 1])
     return out
 
 
 def allowed(room: Room, points, tol: float = 1e-9) -> np.ndarray:
     """(...,) bool: each point may carry an anchor: on a mounting rectangle (within ``tol``
-    m) and in no keep-out box (closed, no tolerance)."""
+    m), in no keep-out box (closed, no tolerance) and inside the room (the floor plan,
+    outside the obstacles)."""
+    room = as_room(room)
     p = np.asarray(points, dtype=float)
-    return on_surfaces(room, p, tol) & ~room.in_keepout(p)
+    ok = on_surfaces(room, p, tol) & ~room.in_keepout(p)
+    if not room.is_shoebox or room.obstacles:
+        ok &= room.contains(p)
+    return ok
 
 
 def project(room: Room, points) -> np.ndarray:
@@ -176,26 +124,38 @@ def project(room: Room, points) -> np.ndarray:
     p = checks.reals("points", points)
     if p.ndim < 1 or p.shape[-1] != 3:
         raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
-    lo, hi, _ = _room_regions(as_room(room))[1]
-    cand = np.clip(p[..., None, :], lo, hi)  # (..., S, 3)
+    room = as_room(room)
+    lo, hi, idx = _room_regions(room)[1]
+    o, e = _frames(room, idx)  # (R, 3), (R, 2, 3)
+    d = p[..., None, :] - o  # (..., R, 3)
+    uv = np.clip(np.einsum("...rk,rjk->...rj", d, e), lo, hi)  # (..., R, 2)
+    cand = o + uv[..., 0, None] * e[:, 0] + uv[..., 1, None] * e[:, 1]  # (..., R, 3)
     dist = np.sum((cand - p[..., None, :]) ** 2, axis=-1)
     best = np.argmin(dist, axis=-1)
     return np.take_along_axis(cand, best[..., None, None], axis=-2)[..., 0, :]
 
 
 def surface_index(room: Room, points, tol: float = 1e-9) -> np.ndarray:
-    """(...,) index into :func:`mounting_surfaces` of the surface each point lies on, −1 if none."""
+    """(...,) index into :func:`mounting_surfaces` of the surface each point lies on
+    (within ``tol`` m of its plane and its rectangle), −1 if none."""
     p = checks.reals("points", points)
     if p.ndim < 1 or p.shape[-1] != 3:
         raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
     tol = checks.real("tol", tol, low=0.0, high=1.0, unit="m")
-    lo, hi = _bounds(room)
-    on = np.all((p[..., None, :] >= lo - tol) & (p[..., None, :] <= hi + tol), axis=-1)
+    surfs = mounting_surfaces(room)
+    on = np.zeros((*p.shape[:-1], len(surfs)), dtype=bool)
+    for i, s in enumerate(surfs):
+        uv = s.uv(p)
+        on[..., i] = (
+            (np.abs(s.height(p)) <= tol)
+            & np.all(uv >= np.asarray(s.lower) - tol, axis=-1)
+            & np.all(uv <= np.asarray(s.upper) + tol, axis=-1)
+        )
     return np.where(on.any(axis=-1), np.argmax(on, axis=-1), -1)
 
 
 def on_surfaces(room: Room, points, tol: float = 1e-9) -> np.ndarray:
-    """(...,) bool: each point lies on an allowed mounting rectangle (within ``tol`` m)."""
+    """(...,) bool: each point lies on a mounting rectangle (within ``tol`` m)."""
     return surface_index(room, points, tol) >= 0
 
 
@@ -205,9 +165,8 @@ def to_uv(room: Room, points, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray
     idx = surface_index(room, p, tol)
     if np.any(idx < 0):
         raise ValueError("points: some points are not on an allowed mounting surface")
-    surfs = mounting_surfaces(room)
-    uv_axes = np.array([s.uv_axes for s in surfs])[idx]  # (..., 2)
-    return idx, np.take_along_axis(p, uv_axes, axis=-1)
+    o, e = _frames(room, idx)
+    return idx, np.einsum("...k,...jk->...j", p - o, e)
 
 
 def from_uv(room: Room, index, uv, tol: float = 1e-6) -> np.ndarray:
@@ -260,6 +219,7 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
             "use a larger spacing"
         )
     rlo, rhi, ridx = _room_regions(room)[1]
+    plain = room.is_shoebox and not room.obstacles
     pts = []
     for i, s in enumerate(mounting_surfaces(room)):
         axes = [
@@ -268,12 +228,16 @@ def candidate_grid(room: Room, spacing: float = 0.5) -> np.ndarray:
         ]
         uv = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 2)
         p = s.point(uv)
-        if room.keepouts:
-            p = p[~room.in_keepout(p)]
+        if room.keepouts or not plain:
             lo, hi = rlo[ridx == i], rhi[ridx == i]
-            inside = np.all((p[:, None] >= lo - 1e-9) & (p[:, None] <= hi + 1e-9), axis=-1)
+            keep = ~room.in_keepout(p)
+            if not plain:  # outside the floor plan, in an obstacle: in no allowed rectangle
+                keep &= np.any(np.all((uv[:, None] >= lo - 1e-9) & (uv[:, None] <= hi + 1e-9),
+                                      axis=-1), axis=1)  # fmt: skip
+            p, uv = p[keep], uv[keep]
+            inside = np.all((uv[:, None] >= lo - 1e-9) & (uv[:, None] <= hi + 1e-9), axis=-1)
             empty = ~inside.any(axis=0)
-            p = np.concatenate([p, (lo[empty] + hi[empty]) / 2])
+            p = np.concatenate([p, s.point((lo[empty] + hi[empty]) / 2)])
         pts.append(p)
     return new_points(np.empty((0, 3)), np.concatenate(pts, axis=0))
 
@@ -317,8 +281,8 @@ def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = No
     clo, chi, cidx = _room_regions(as_room(room))[0]
     out = []
     for i, (s, n) in enumerate(zip(mounting_surfaces(room), area_counts(room, M), strict=True)):
-        lo = clo[cidx == i][:, s.uv_axes]
-        hi = chi[cidx == i][:, s.uv_axes]
+        lo = clo[cidx == i]
+        hi = chi[cidx == i]
         if len(lo) == 1:  # no keep-out on this surface: the same draws as without keep-outs
             uv = rng.uniform(lo[0], hi[0], size=(n, 2))
         else:
@@ -334,7 +298,7 @@ def _edge_segments(room: Room) -> list[tuple[np.ndarray, np.ndarray]]:
     order of ``room.mounting``), or without mounting walls the edge of the first mounting
     surface (ceiling or floor), as (start, end) segments."""
     surfs = mounting_surfaces(room)
-    walls = [s for s in surfs if s.axis != 2]
+    walls = [s for s in surfs if s.name in room.mounting and s.name not in ("ceiling", "floor")]
     if walls:  # wall rectangles have v = z: the top edge is v = upper
         return [
             (s.point([s.lower[0], s.upper[1]]), s.point([s.upper[0], s.upper[1]])) for s in walls

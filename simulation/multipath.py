@@ -20,6 +20,10 @@ omnidirectional. This is the convention of pyroomacoustics' shoebox ISM
 
 Images whose wall product is zero (e.g. the techtile room's fully absorbing west and east
 walls) are dropped once per room, so the path axis only holds paths that can carry energy.
+
+A room that is not a plain shoebox (a polygonal floor plan, or obstacles) has images that
+are not visible from every node: :func:`compute_paths` then traces each path
+(:mod:`simulation.polyhedral`), with the same amplitude rule.
 """
 
 from __future__ import annotations
@@ -104,24 +108,44 @@ class ImageSet:
 class Paths:
     """Propagation paths from every anchor to every node.
 
-    length : (P, M, I) path lengths d in metres.
+    length : (P, M, I) path lengths d in metres; path 0 is the direct path.
     amplitude : (P, M, I) amplitudes A (unit-amplitude chirp at the speaker); paths that
-        carry no energy (cardioid null) have A = 0.
+        carry no energy (cardioid null, a blocked direct path, padding) have A = 0.
+    line_of_sight : (P, M) bool, whether the direct path is unobstructed (None: all are,
+        as in a shoebox without obstacles).
     """
 
     length: np.ndarray
     amplitude: np.ndarray
+    line_of_sight: np.ndarray | None = None
+
+    @property
+    def los(self) -> np.ndarray:
+        """(P, M) bool: the direct path is unobstructed."""
+        if self.line_of_sight is None:
+            return np.ones(self.length.shape[:2], dtype=bool)
+        return self.line_of_sight
 
     def delays(self, speed_of_sound: float) -> np.ndarray:
         """(P, M, I) propagation delays d/c in seconds."""
         return self.length / speed_of_sound
 
 
-def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, aim_at=None) -> Paths:
+def compute_paths(
+    room: Room,
+    anchors,
+    nodes,
+    images: ImageSet | None = None,
+    aim_at=None,
+    directivity: str = "cardioid",
+) -> Paths:
     """Image-source paths from anchors (M, 3) to nodes (P, 3), vectorized over P × M × I.
 
-    ``aim_at`` (3,) is where the cardioids point (default the room centroid, paper §V-A).
-    A node exactly on an image (d = 0) is not physical; such paths get A = 0.
+    ``aim_at`` (3,) is where the cardioids point (default the room centroid, paper §V-A);
+    ``directivity`` "omni" makes the speakers omnidirectional (the peer simulator's
+    general rooms have no speaker directivity). A node exactly on an image (d = 0) is not
+    physical; such paths get A = 0. A polygonal room or one with obstacles goes through
+    :mod:`simulation.polyhedral` (``images`` is then not used).
     """
     room = as_room(room)
     a = checks.reals("anchors", anchors)
@@ -130,6 +154,10 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
         raise ValueError(f"anchors: expected shape (M, 3), got {a.shape}")
     if p.ndim != 2 or p.shape[1] != 3:
         raise ValueError(f"nodes: expected shape (P, 3), got {p.shape}")
+    checks.choice("directivity", directivity, ("cardioid", "omni"))
+    aim = aim_vectors(a, room.centroid if aim_at is None else np.asarray(aim_at, float))  # (M,3)
+    if not room.is_shoebox or room.obstacles:
+        return _traced_paths(room, a, p, aim, directivity)
     images = ImageSet.for_room(room) if images is None else images
     if not isinstance(images, ImageSet):
         raise ValueError(f"images: must be an ImageSet or None, got {checks.describe(images)}")
@@ -140,7 +168,6 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
         value=(p.shape[0], a.shape[0], len(images)),
         hint="use fewer nodes or anchors, or a lower max_order",
     )
-    aim = aim_vectors(a, room.centroid if aim_at is None else np.asarray(aim_at, float))  # (M,3)
     q = images.positions(room, a)  # (M, I, 3)
     u = p[:, None, None, :] - q[None]  # (P, M, I, 3) image -> node
     d = np.sqrt(np.einsum("pmik,pmik->pmi", u, u))
@@ -148,6 +175,23 @@ def compute_paths(room: Room, anchors, nodes, images: ImageSet | None = None, ai
     proj = np.einsum("pmik,ik,mk->pmi", u, images.mirror, aim)
     ok = d > 0
     safe = np.where(ok, d, 1.0)
-    gain = cardioid(np.clip(proj / safe, -1.0, 1.0))
+    gain = cardioid(np.clip(proj / safe, -1.0, 1.0)) if directivity == "cardioid" else 1.0
     amp = images.reflection * gain * np.exp(-0.5 * room.air_reference * d) / (4 * np.pi * safe)
     return Paths(length=d, amplitude=np.where(ok, amp, 0.0))
+
+
+def _traced_paths(room: Room, a: np.ndarray, p: np.ndarray, aim: np.ndarray, directivity) -> Paths:
+    """:func:`compute_paths` of a room that is not a plain shoebox (module docstring)."""
+    from simulation.polyhedral import paths
+
+    n = p.shape[0] * a.shape[0]
+    checks.check_size(
+        "nodes x anchors", n * 8 * 200, value=(p.shape[0], a.shape[0]), hint="use fewer nodes"
+    )
+    d, first, beta, valid, los = paths(room, a, p)
+    cos = np.einsum("pmik,mk->pmi", first, aim)
+    gain = cardioid(np.clip(cos, -1.0, 1.0)) if directivity == "cardioid" else 1.0
+    ok = valid & (d > 0)
+    safe = np.where(ok, d, 1.0)
+    amp = beta * gain * np.exp(-0.5 * room.air_reference * safe) / (4 * np.pi * safe)
+    return Paths(length=d, amplitude=np.where(ok, amp, 0.0), line_of_sight=los)

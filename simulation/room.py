@@ -1,8 +1,11 @@
-"""The shoebox room: geometry, materials, sound speed, mounting surfaces and the node grid.
+"""The room: geometry, materials, sound speed, mounting surfaces and the node grid.
 
-Defaults: the paper's Techtile room (docs/model.md). Surfaces are named after pyroomacoustics'
-shoebox walls' compass convention: floor (z=0), ceiling (z=Lz), south (y=0),
-north (y=Ly), west (x=0), east (x=Lx).
+A room is a shoebox (``Room(size=...)``; defaults: the paper's Techtile room, docs/model.md)
+or an extruded simple polygon (``Room.from_corners(corners, height)``, :mod:`simulation.
+floorplan`), either with obstacles standing in it. A shoebox's surfaces are named after
+pyroomacoustics' compass convention: floor (z=0), ceiling (z=Lz), south (y=0), north
+(y=Ly), west (x=0), east (x=Lx); a polygonal room's walls are ``wall-0`` … (or named), with
+its floor and ceiling.
 """
 
 from __future__ import annotations
@@ -17,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from simulation import air, checks
-from simulation.regions import free_cells, in_boxes
+from simulation import air, checks, floorplan
+from simulation.regions import in_boxes
 from simulation.signal import Signal, as_signal
 
 #: The six planes of a shoebox: name -> (axis, side), side 0 is the plane at 0, 1 at L.
@@ -50,22 +53,33 @@ AIR_ABSORPTION_RANGE = (0.0, 5.0)  # 1/m
 MAX_ORDER = 12
 
 
-def _check_surface_names(names, what: str) -> None:
-    unknown = [n for n in names if not isinstance(n, str) or n not in SURFACES]
+def _check_surface_names(names, what: str, allowed=tuple(SURFACES)) -> None:
+    unknown = [n for n in names if not isinstance(n, str) or n not in allowed]
     if unknown:
-        raise ValueError(f"{what}: unknown surface name(s) {unknown}; allowed: {list(SURFACES)}")
+        raise ValueError(f"{what}: unknown surface name(s) {unknown}; allowed: {list(allowed)}")
 
 
 @dataclass(frozen=True)
 class Room:
-    """A shoebox room with per-surface energy absorption.
+    """A room, shoebox or polygonal, with per-surface energy absorption and obstacles.
 
     Attributes
     ----------
-    size : (Lx, Ly, Lz) in metres, each in [0.5, 100] m.
+    size : (Lx, Ly, Lz) in metres, each in [0.5, 100] m; for a polygonal room the
+        corners' largest x and y and the height (:meth:`from_corners` sets it).
+    corners : None (a shoebox), or the floor plan's corners ((x, y), ...) in metres, a
+        simple polygon with x, y ≥ 0, stored counter-clockwise (:mod:`simulation.floorplan`).
+    wall_names : the polygon's wall names, one per edge (corner i to i + 1; default
+        ``wall-i``); a shoebox's walls are south, east, north, west.
+    obstacles : boxes standing in the room, :class:`simulation.floorplan.Obstacle` or
+        ``{"min": [x, y, z], "max": [x, y, z], "name", "absorption", "mountable"}``; they
+        block and reflect sound, hold no node or anchor, and a ``mountable`` one's faces
+        carry anchors.
+    obstacle_order : the most reflections on obstacle faces a path may have (None: the
+        room's ``max_order``).
     absorption : energy absorption coefficient α in [0, 1] per surface name; the
         reflection amplitude is β = √(1 − α). Missing surfaces default to the
-        techtile values.
+        techtile values (a shoebox) or 0.45 (a polygonal room).
     temperature : air temperature in °C, in [−40, 60]; sets :attr:`speed_of_sound`.
     max_order : image-source reflection order, an integer in [0, 12].
     air_absorption : the air's attenuation: a number a in 1/m (in [0, 5]; a path of
@@ -76,7 +90,9 @@ class Room:
     pressure : air pressure in kPa, in [50, 110] (ISO 9613-1 only).
     signal : the chirp and receiver (:class:`simulation.Signal`, or a mapping of its
         keys; default the paper's design); its reach bounds the ranges the receiver sees.
-    mounting : the surfaces anchors may be mounted on.
+    mounting : the surfaces anchors may be mounted on (default: south, north and ceiling
+        in a shoebox, every wall and the ceiling in a polygonal room); the faces of
+        mountable obstacles come on top.
     anchor_offset : anchors sit this far (m) from their plane and at least this far
         from the neighbouring planes.
     node_margin : the evaluation grid keeps this distance (m) from every plane.
@@ -95,11 +111,11 @@ class Room:
     """
 
     size: tuple[float, float, float] = (8.0, 4.0, 2.4)
-    absorption: Mapping[str, float] = field(default_factory=lambda: dict(TECHTILE_ABSORPTION))
+    absorption: Mapping[str, float] | None = None
     temperature: float = 20.0
     max_order: int = 3
     air_absorption: float = 0.0875
-    mounting: tuple[str, ...] = ("south", "north", "ceiling")
+    mounting: tuple[str, ...] | None = None
     anchor_offset: float = 0.03
     node_margin: float = 0.05
     sound_speed: float | None = None
@@ -112,44 +128,14 @@ class Room:
     humidity: float = 50.0
     pressure: float = air.REFERENCE_PRESSURE
     signal: Signal = field(default_factory=Signal)
+    corners: tuple | None = None
+    wall_names: tuple[str, ...] = ()
+    obstacles: tuple = ()
+    obstacle_order: int | None = None
 
     def __post_init__(self) -> None:
-        lo, hi = SIZE_RANGE
-        try:
-            size = checks.reals("size", self.size, shape=(3,), low=lo, high=hi, unit="m")
-        except ValueError as exc:
-            raise ValueError(
-                f"size: expected 3 lengths (Lx, Ly, Lz), each in [{lo:g}, {hi:g}] m, "
-                f"got {checks.describe(self.size)}"
-            ) from exc
-        size = tuple(float(s) for s in size)
-        object.__setattr__(self, "size", size)
-
-        absorption = dict(TECHTILE_ABSORPTION)
-        checks.mapping(
-            "absorption", self.absorption, "a mapping (TOML table) of surface name -> [0, 1]"
-        )
-        _check_surface_names(self.absorption, "absorption")
-        for k, v in self.absorption.items():
-            absorption[k] = checks.real(f"absorption[{k!r}]", v, low=0.0, high=1.0)
-        object.__setattr__(self, "absorption", absorption)
-
-        if isinstance(self.mounting, str):
-            mounting = (self.mounting,)
-        elif isinstance(self.mounting, list | tuple):
-            mounting = tuple(self.mounting)
-        else:
-            raise ValueError(
-                f"mounting: must be a surface name or a list of them from {list(SURFACES)}, "
-                f"got {checks.describe(self.mounting)}"
-            )
-        if not mounting:
-            raise ValueError("mounting: at least one surface is required")
-        _check_surface_names(mounting, "mounting")
-        if len(set(mounting)) != len(mounting):
-            raise ValueError(f"mounting: duplicate surface names in {mounting}")
-        object.__setattr__(self, "mounting", mounting)
-
+        size = self._init_geometry()
+        self._init_surfaces()
         lo, hi = TEMPERATURE_RANGE
         t = checks.real("temperature", self.temperature, low=lo, high=hi, unit="°C")
         object.__setattr__(self, "temperature", t)
@@ -160,6 +146,9 @@ class Room:
         object.__setattr__(
             self, "max_order", checks.count("max_order", self.max_order, low=0, high=MAX_ORDER)
         )
+        order = self.max_order if self.obstacle_order is None else self.obstacle_order
+        order = checks.count("obstacle_order", order, low=0, high=self.max_order)
+        object.__setattr__(self, "obstacle_order", order)
         self._init_air()
         object.__setattr__(self, "signal", as_signal(self.signal))
         if not isinstance(self.name, str):
@@ -168,7 +157,75 @@ class Room:
         for fname in ("anchor_offset", "node_margin"):
             v = checks.real(fname, getattr(self, fname), low=0.0, high=half, high_open=True)
             object.__setattr__(self, fname, v)
+        object.__setattr__(
+            self, "obstacles", floorplan.obstacles_from(self.obstacles, size, self.corners)
+        )
         self._init_boxes(size)
+
+    def _init_geometry(self) -> tuple[float, float, float]:
+        """Check the size, or normalize the floor plan and derive the size from it."""
+        lo, hi = SIZE_RANGE
+        if self.corners is not None:
+            c, names = floorplan.normalize_corners(self.corners, self.wall_names)
+            object.__setattr__(self, "corners", tuple((float(x), float(y)) for x, y in c))
+            object.__setattr__(self, "wall_names", names)
+            h = (
+                self.size[2]
+                if isinstance(self.size, list | tuple) and len(self.size) == 3
+                else None
+            )
+            want = (float(c[:, 0].max()), float(c[:, 1].max()), h)
+            given = checks.reals("size", self.size, shape=(3,))
+            if not np.allclose(given[:2], want[:2], atol=1e-9):
+                raise ValueError(
+                    f"size: with corners, size is (max x, max y, height) = ({want[0]:g}, "
+                    f"{want[1]:g}, height), got {given.tolist()} (use Room.from_corners)"
+                )
+        elif self.wall_names:
+            raise ValueError("wall_names: only a polygonal room (corners) takes wall names")
+        try:
+            size = checks.reals("size", self.size, shape=(3,), low=lo, high=hi, unit="m")
+        except ValueError as exc:
+            what = "the corners' largest x and y and the height" if self.corners else "Lx, Ly, Lz"
+            raise ValueError(
+                f"size: expected 3 lengths ({what}), each in [{lo:g}, {hi:g}] m, "
+                f"got {checks.describe(self.size)}"
+            ) from exc
+        size = tuple(float(v) for v in size)
+        object.__setattr__(self, "size", size)
+        return size
+
+    def _init_surfaces(self) -> None:
+        """Absorption per surface and the mounting surfaces, by the room's surface names."""
+        names = self.surface_names
+        if self.is_shoebox:
+            absorption = dict(TECHTILE_ABSORPTION)
+            default_mounting: tuple[str, ...] = ("south", "north", "ceiling")
+        else:
+            absorption = dict.fromkeys(names, floorplan.DEFAULT_ABSORPTION)
+            default_mounting = (*self.wall_names, "ceiling")
+        given = {} if self.absorption is None else self.absorption
+        checks.mapping("absorption", given, "a mapping (TOML table) of surface name -> [0, 1]")
+        _check_surface_names(given, "absorption", names)
+        for k, v in given.items():
+            absorption[k] = checks.real(f"absorption[{k!r}]", v, low=0.0, high=1.0)
+        object.__setattr__(self, "absorption", absorption)
+        mounting = default_mounting if self.mounting is None else self.mounting
+        if isinstance(mounting, str):
+            mounting = (mounting,)
+        elif isinstance(mounting, list | tuple):
+            mounting = tuple(mounting)
+        else:
+            raise ValueError(
+                f"mounting: must be a surface name or a list of them from {list(names)}, "
+                f"got {checks.describe(mounting)}"
+            )
+        if not mounting:
+            raise ValueError("mounting: at least one surface is required")
+        _check_surface_names(mounting, "mounting", names)
+        if len(set(mounting)) != len(mounting):
+            raise ValueError(f"mounting: duplicate surface names in {mounting}")
+        object.__setattr__(self, "mounting", mounting)
 
     def _init_air(self) -> None:
         """Check the air model: a coefficient, or ISO 9613-1 with humidity and pressure."""
@@ -214,33 +271,27 @@ class Room:
         if not ok:
             raise ValueError(f"zone_spacing: must be a finite number > 0 m, got {zs!r}")
         object.__setattr__(self, "zone_spacing", float(zs))
-        # every mounting surface keeps some allowed area
-        o = self.anchor_offset
-        for name in self.mounting:
-            axis, side = SURFACES[name]
-            uv = tuple(k for k in range(3) if k != axis)
-            offset = o if side == 0 else size[axis] - o
-            cut = [k for k, (lo, hi) in enumerate(self.keepouts) if lo[axis] <= offset <= hi[axis]]
-            blocks = [
-                ((lo[uv[0]], lo[uv[1]]), (hi[uv[0]], hi[uv[1]]))
-                for lo, hi in (self.keepouts[k] for k in cut)
-            ]
-            lo_, hi_ = free_cells((o, o), (size[uv[0]] - o, size[uv[1]] - o), blocks)
-            if not np.any(np.prod(hi_ - lo_, axis=-1) > 0):
-                raise ValueError(
-                    f"keepouts: boxes {cut} ({[[list(b[0]), list(b[1])] for b in blocks]} in "
-                    f"the plane) cover the whole mounting area of surface {name!r} (anchors "
-                    f"{o:g} m off the plane, at least {o:g} m from its edges); allowed: boxes "
-                    f"that leave part of it free, or remove {name!r} from mounting"
-                )
+        from simulation.mounting import check_mounting_area
+
+        check_mounting_area(self)  # every mounting surface keeps some allowed area
         for k, (lo, hi) in enumerate(self.zones):
             if len(self._zone_nodes(lo, hi)) == 0:
+                where = (
+                    ""
+                    if self.is_shoebox and not self.obstacles
+                    else (", inside the floor plan and outside the obstacles")
+                )
                 raise ValueError(
                     f"zones[{k}]: no node of its {self.zone_spacing:g} m grid lies at least "
-                    f"node_margin = {self.node_margin:g} m from every plane, got min="
-                    f"{list(lo)} max={list(hi)}; allowed: a box that reaches into "
-                    f"[{self.node_margin:g}, L - {self.node_margin:g}] on every axis"
+                    f"node_margin = {self.node_margin:g} m from every plane{where}, got min="
+                    f"{list(lo)} max={list(hi)}; allowed: a box that reaches into the room's "
+                    f"free space, [{self.node_margin:g}, L - {self.node_margin:g}] on every axis"
                 )
+        if len(self.grid()) == 0:
+            raise ValueError(
+                "obstacles: no node of the room's grid is left outside them; allowed: "
+                "obstacles that leave room for tags"
+            )
 
     # -- constructors -------------------------------------------------------------------
     @classmethod
@@ -249,16 +300,36 @@ class Room:
         return cls()
 
     @classmethod
+    def from_corners(cls, corners, height: float, **kw) -> Room:
+        """A polygonal room: the floor plan ``corners`` [[x, y], ...] (m; a simple polygon,
+        convex or not, either orientation, x, y ≥ 0) extruded to ``height`` m. Every other
+        keyword is a :class:`Room` field (absorption by wall name, ``wall_names``,
+        ``obstacles``, keep-outs, zones, mounting, sound speed, ...)."""
+        if "size" in kw:
+            raise ValueError("size: a polygonal room takes corners and height, not size")
+        c = checks.reals("corners", corners, finite=False)
+        if c.ndim != 2 or c.shape[-1] != 2 or len(c) == 0:
+            raise ValueError(
+                f"corners: expected corners [[x, y], ...] in metres, got {checks.describe(corners)}"
+            )
+        lo, hi = SIZE_RANGE
+        h = checks.real("height", height, low=lo, high=hi, unit="m")
+        size = (float(np.nanmax(c[:, 0])), float(np.nanmax(c[:, 1])), h)
+        kw.setdefault("name", "room")
+        return cls(size=size, corners=c.tolist(), **kw)
+
+    @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Room:
         """Build a room from :meth:`to_dict` output (unknown keys raise ``ValueError``)."""
         checks.mapping("room", d, "a mapping of Room fields")
         kw = dict(d)
-        for alias, fname in (("keepout", "keepouts"), ("zone", "zones")):  # TOML [[keepout]]
+        aliases = (("keepout", "keepouts"), ("zone", "zones"), ("obstacle", "obstacles"))
+        for alias, fname in aliases:  # TOML [[keepout]], [[zone]], [[obstacle]]
             if alias in kw:
                 if fname in kw:
                     raise ValueError(f"room: give either {alias!r} or {fname!r}, not both")
                 kw[fname] = kw.pop(alias)
-        known = {f for f in cls.__dataclass_fields__}
+        known = {f for f in cls.__dataclass_fields__} | {"height"}
         unknown = [k for k in kw if k not in known]
         if unknown:
             raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
@@ -266,6 +337,12 @@ class Room:
             kw["mounting"] = tuple(kw["mounting"])
         if "signal" in kw:
             kw["signal"] = as_signal(kw["signal"])
+        if "corners" in kw or "height" in kw:
+            if "corners" not in kw or "height" not in kw:
+                raise ValueError("room: a polygonal room needs both 'corners' and 'height'")
+            if "size" in kw:
+                raise ValueError("room: give either size (a shoebox) or corners and height")
+            return cls.from_corners(kw.pop("corners"), kw.pop("height"), **kw)
         return cls(**kw)
 
     @classmethod
@@ -297,9 +374,15 @@ class Room:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON/TOML-serializable dictionary of every field."""
-        d = {
-            "name": self.name,
-            "size": list(self.size),
+        d = {"name": self.name}
+        if self.is_shoebox:
+            d["size"] = list(self.size)
+        else:
+            d["corners"] = [list(c) for c in self.corners]
+            d["height"] = self.size[2]
+            if self.wall_names != tuple(f"wall-{i}" for i in range(len(self.corners))):
+                d["wall_names"] = list(self.wall_names)
+        d |= {
             "temperature": self.temperature,
             "max_order": self.max_order,
             "air_absorption": self.air_absorption,
@@ -327,6 +410,10 @@ class Room:
         signal = self.signal.to_dict()
         if signal:  # the paper's design is the default: a plain room's dictionary is unchanged
             d["signal"] = signal
+        if self.obstacles:
+            d["obstacles"] = [ob.to_dict() for ob in self.obstacles]
+        if self.obstacle_order != self.max_order:
+            d["obstacle_order"] = self.obstacle_order
         return d
 
     def to_toml(self, path: str | Path) -> None:
@@ -335,7 +422,11 @@ class Room:
         lines = []
         d = self.to_dict()
         absorption = d.pop("absorption")
-        tables = {"keepout": d.pop("keepouts", []), "zone": d.pop("zones", [])}
+        tables = {
+            "keepout": d.pop("keepouts", []),
+            "zone": d.pop("zones", []),
+            "obstacle": d.pop("obstacles", []),
+        }
         signal = d.pop("signal", {})
         for k, v in d.items():
             lines.append(f"{k} = {_toml_value(v)}")
@@ -373,7 +464,49 @@ class Room:
     @property
     def diagonal(self) -> float:
         """The longest distance between two points of the room (m)."""
-        return float(np.linalg.norm(self.size))
+        if self.is_shoebox:
+            return float(np.linalg.norm(self.size))
+        c = np.asarray(self.corners)
+        span = np.max(np.linalg.norm(c[:, None] - c[None], axis=-1))
+        return float(math.hypot(span, self.size[2]))
+
+    # -- geometry --------------------------------------------------------------------------
+    @property
+    def is_shoebox(self) -> bool:
+        """Whether the room is a shoebox (no floor plan); it may still hold obstacles."""
+        return self.corners is None
+
+    @property
+    def surface_names(self) -> tuple[str, ...]:
+        """The names of the room's surfaces: a shoebox's six compass planes, or a polygonal
+        room's walls, floor and ceiling."""
+        if self.is_shoebox:
+            return tuple(SURFACES)
+        return (*self.wall_names, "floor", "ceiling")
+
+    @property
+    def floor_corners(self) -> np.ndarray:
+        """(n, 2) the floor plan's corners, counter-clockwise (a shoebox's rectangle)."""
+        if self.is_shoebox:
+            Lx, Ly, _ = self.size
+            return np.array([[0.0, 0.0], [Lx, 0.0], [Lx, Ly], [0.0, Ly]])
+        return np.asarray(self.corners, dtype=float)
+
+    @property
+    def walls(self) -> list[floorplan.Wall]:
+        """The vertical walls, in corner order (a shoebox: south, east, north, west)."""
+        names = floorplan.SHOEBOX_WALLS if self.is_shoebox else self.wall_names
+        return floorplan.walls(self.floor_corners, names, self.size[2])
+
+    @property
+    def is_convex(self) -> bool:
+        """Whether the floor plan is convex (no wall can block a path between two points)."""
+        if self.is_shoebox:
+            return True
+        from shapely import Polygon
+
+        poly = Polygon(self.corners)
+        return bool(abs(poly.convex_hull.area - poly.area) <= 1e-9 * poly.area)
 
     def air_coefficient(self, frequency) -> np.ndarray:
         """The air's energy attenuation coefficient m(f) in 1/m at ``frequency`` (Hz, any
@@ -406,8 +539,12 @@ class Room:
 
     @property
     def centroid(self) -> np.ndarray:
-        """(3,) room centre in metres (the anchors' aim point)."""
-        return np.array(self.size) / 2
+        """(3,) room centre in metres (the anchors' aim point): the box's centre, or the
+        floor plan's area centroid at half the height."""
+        if self.is_shoebox:
+            return np.array(self.size) / 2
+        cx, cy = floorplan.centroid(self.floor_corners)
+        return np.array([cx, cy, self.size[2] / 2])
 
     def reflection(self, surface: str) -> float:
         """Amplitude reflection coefficient β = √(1 − α) of a surface."""
@@ -415,7 +552,8 @@ class Room:
 
     @property
     def reflections(self) -> np.ndarray:
-        """(3, 2) reflection amplitudes β indexed by [axis, side] (side 0: plane at 0)."""
+        """(3, 2) reflection amplitudes β of a shoebox indexed by [axis, side] (side 0: plane
+        at 0)."""
         b = np.empty((3, 2))
         for name, (axis, side) in SURFACES.items():
             b[axis, side] = self.reflection(name)
@@ -429,6 +567,9 @@ class Room:
         nodes) a regular (nx, ny, nz) grid of the whole room, evenly spaced,
         ``node_margin`` from every plane, ordered with x slowest and z fastest; the
         default (9, 6, 5) gives the paper's 270 nodes with spacing 98.75 / 78.0 / 57.5 cm.
+        In a polygonal room or one with obstacles the grid spans the bounding box and
+        keeps the nodes inside the room (:meth:`contains`, ``node_margin`` from its walls
+        and obstacles).
         """
         if shape is None:
             if self.zones:
@@ -441,8 +582,10 @@ class Room:
             np.linspace(m, L - m, n) if n > 1 else np.array([L / 2])
             for L, n in zip(self.size, shape, strict=True)
         ]
-        g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
-        return g.reshape(-1, 3)
+        g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        if self.is_shoebox and not self.obstacles:
+            return g
+        return g[self.contains(g, margin=max(self.node_margin - 1e-9, 0.0))]
 
     def _zone_nodes(self, lo, hi) -> np.ndarray:
         """(n, 3) grid nodes of one zone inside the node margin (see :meth:`zone_grid`)."""
@@ -474,18 +617,42 @@ class Room:
         return in_boxes(self.keepouts, points).any(axis=-1)
 
     def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
-        """(P,) bool: points (P, 3) lie inside the room, at least ``margin`` from each plane."""
+        """(P,) bool: points (P, 3) lie inside the room, at least ``margin`` from each plane
+        (the walls, floor and ceiling) and outside every obstacle grown by ``margin``."""
         p = checks.reals("points", points, finite=False)
         if p.ndim < 1 or p.shape[-1] != 3:
             raise ValueError(f"points: expected shape (..., 3), got {p.shape}")
         margin = checks.real("margin", margin, low=0.0, unit="m")
-        return np.all((p >= margin) & (p <= np.array(self.size) - margin), axis=-1)
+        inside = np.all((p >= margin) & (p <= np.array(self.size) - margin), axis=-1)
+        if not self.is_shoebox:
+            inside &= floorplan.contains_xy(self.floor_corners, p[..., :2], margin)
+        for ob in self.obstacles:
+            # a point on a face is outside (anchors sit 3 cm off a mountable face)
+            inside &= ~ob.contains(p, margin - 1e-12 if margin > 0 else -1e-12)
+        return inside
+
+    def in_obstacle(self, points) -> np.ndarray:
+        """(...,) bool: points (..., 3) inside an obstacle (faces excluded)."""
+        p = np.asarray(points, dtype=float)
+        out = np.zeros(p.shape[:-1], dtype=bool)
+        for ob in self.obstacles:
+            out |= ob.contains(p, -1e-12)
+        return out
 
     def check_nodes(self, nodes) -> np.ndarray:
-        """Validate evaluation nodes: (P, 3) finite, P ≥ 1, inside the room; returns them as
-        a float array, or raises ``ValueError`` naming ``nodes``."""
+        """Validate evaluation nodes: (P, 3) finite, P ≥ 1, inside the room (and, in a
+        polygonal room or one with obstacles, inside the floor plan and outside every
+        obstacle); returns them as a float array, or raises ``ValueError`` naming ``nodes``."""
         p = checks.points("nodes", nodes)
         checks.inside("nodes", p, self.size)
+        if not self.is_shoebox or self.obstacles:
+            out = ~self.contains(p)
+            if np.any(out):
+                bad = np.flatnonzero(out)
+                raise ValueError(
+                    f"nodes: node(s) {bad[:10].tolist()} lie outside the floor plan or inside "
+                    f"an obstacle, e.g. {p[bad[0]].tolist()}"
+                )
         return p
 
     def check_anchors(self, anchors, min_anchors: int = 4) -> np.ndarray:
@@ -505,10 +672,19 @@ class Room:
             raise ValueError("anchors: coordinates must be finite (no NaN or inf)")
         outside = ~self.contains(a)
         if np.any(outside):
-            raise ValueError(
-                f"anchors: anchor(s) {np.flatnonzero(outside).tolist()} lie outside the room "
+            bad = np.flatnonzero(outside).tolist()
+            if self.obstacles and np.any(self.in_obstacle(a)):
+                k = int(np.argmax(self.in_obstacle(a)))
+                raise ValueError(
+                    f"anchors: anchor(s) {bad} lie outside the room or in an obstacle; anchor "
+                    f"{k} at {a[k].tolist()} is inside an obstacle (use placement.project)"
+                )
+            where = (
                 f"[0, {self.size[0]}] x [0, {self.size[1]}] x [0, {self.size[2]}] m"
+                if self.is_shoebox
+                else f"the floor plan {self.floor_corners.tolist()} from z = 0 to {self.size[2]} m"
             )
+            raise ValueError(f"anchors: anchor(s) {bad} lie outside the room {where}")
         hits = in_boxes(self.keepouts, a)  # (M, B)
         if np.any(hits):
             bad = np.flatnonzero(hits.any(axis=1))
@@ -525,9 +701,15 @@ class Room:
         """(4, 3) the paper's non-optimized "corners" layout (§V-A), offset from the planes.
 
         For techtile: (0.03, 0.03, 0.03) south, (7.97, 3.97, 0.03) north, (7.97, 0.03, 2.37)
-        and (0.03, 3.97, 2.37) ceiling.
+        and (0.03, 3.97, 2.37) ceiling. A polygonal room: one anchor in every corner of the
+        floor plan (inset by ``anchor_offset``), alternately near the floor and near the
+        ceiling (n anchors for n corners).
         """
         o = self.anchor_offset
+        if not self.is_shoebox:
+            xy = floorplan.inset(self.floor_corners, o)
+            z = np.where(np.arange(len(xy)) % 2 == 0, o, self.size[2] - o)
+            return np.column_stack([xy, z])
         Lx, Ly, Lz = self.size
         return np.array(
             [[o, o, o], [Lx - o, Ly - o, o], [Lx - o, o, Lz - o], [o, Ly - o, Lz - o]], dtype=float
