@@ -4,7 +4,7 @@ Imports only from :mod:`simulation` (never from :mod:`placement`).
 """
 
 from analysis import statistics
-from analysis.coverage import coverage, covered_share, heard, heard_sigma
+from analysis.coverage import bound, coverage, covered_share, heard, heard_sigma
 from analysis.fim import crlb, crlb_trace, fim, gdop, peb
 from analysis.noise import (
     CalibratedRangeNoise,
@@ -21,6 +21,7 @@ __all__ = [
     "ConstantRangeNoise",
     "MultipathRangeNoise",
     "PhysicalRangeNoise",
+    "bound",
     "calibrated_sigma",
     "coverage",
     "covered_share",

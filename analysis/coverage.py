@@ -1,10 +1,13 @@
 """Coverage: how many anchors a tag hears, and where fewer than 4 leave it without a fix.
 
-A node hears anchor j when the receiver would report a range of it
-(:meth:`analysis.noise.PhysicalRangeNoise.heard`, docs/model.md, "Coverage"): the direct
-path lies within the signal's reach (and beyond its near limit) and, for a receiver with a
-detection threshold, the direct path's expected correlation peak clears it at the SNR
-rule's noise level. A position fix needs 4 heard anchors (:mod:`simulation.positioning`).
+A node hears anchor j when the receiver would report a range of its direct path
+(:meth:`analysis.noise.PhysicalRangeNoise.heard`, docs/model.md, "Coverage"): nothing
+blocks the line of sight (a wall of a non-convex room, an obstacle), the direct path lies
+within the signal's reach (and beyond its near limit) and, for a receiver with a
+detection threshold, its expected correlation peak clears it at the SNR rule's noise
+level. A position fix needs 4 heard anchors (:mod:`simulation.positioning`); a blocked
+anchor still gives the receiver an echo to pick, which the simulation counts and the
+bound does not.
 This is the geometry of the signal design, from the direct path alone; the simulated
 availability (``Evaluation.availability``) also counts the noise. :func:`heard_sigma` gives
 the bounds (PEB maps, the report) the same view: an anchor not heard carries no
@@ -52,4 +55,15 @@ def heard_sigma(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_
     return np.where(h, s, np.inf)
 
 
-__all__ = ["coverage", "covered_share", "heard", "heard_sigma"]
+def bound(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_SNR_DB):
+    """(..., P) PEB = √tr J⁻¹ (m) from the anchors each node hears (:func:`heard_sigma`),
+    +inf at a node that hears fewer than 4 (no fix) or whose heard anchors leave J
+    singular: the bound the report and the PEB maps show."""
+    from analysis.fim import peb
+
+    s = heard_sigma(room, anchors, nodes, sigma, snr_db)
+    out = peb(anchors, nodes, sigma=s)
+    return np.where(np.sum(np.isfinite(s), axis=-1) >= MIN_HEARD, out, np.inf)
+
+
+__all__ = ["bound", "coverage", "covered_share", "heard", "heard_sigma"]

@@ -37,8 +37,8 @@ from matplotlib.colors import LogNorm, Normalize, TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from analysis.coverage import bound as _bound
 from analysis.coverage import coverage as _coverage
-from analysis.coverage import heard_sigma
 from analysis.fim import peb as _peb
 from analysis.statistics import ecdf, error_stats
 from simulation import checks
@@ -222,9 +222,65 @@ def _values(v, name: str, n: int) -> np.ndarray:
 _AXES = "xyz"
 
 
+def _draw_room2d(ax, room: Room, iu: int, iv: int) -> None:
+    """A polygonal room's floor plan (outline, the outside of it blanked) in a plan view,
+    and the obstacles (cross-hatched, their height written on them in a plan view)
+    projected onto the (iu, iv) plane."""
+    from matplotlib.patches import PathPatch, Rectangle
+    from matplotlib.path import Path as MPath
+
+    L = room.size
+    if not room.is_shoebox and (iu, iv) == (0, 1):
+        c = room.floor_corners
+        box = [(0, 0), (L[0], 0), (L[0], L[1]), (0, L[1]), (0, 0)]
+        ring = [*map(tuple, c[::-1]), tuple(c[-1])]  # clockwise: a hole in the box
+        codes = [MPath.MOVETO] + [MPath.LINETO] * 3 + [MPath.CLOSEPOLY]
+        codes += [MPath.MOVETO] + [MPath.LINETO] * (len(c) - 1) + [MPath.CLOSEPOLY]
+        path = MPath(box + ring, codes)
+        ax.add_patch(PathPatch(path, facecolor="white", edgecolor="none", zorder=2.2,
+                               gid="outside"))  # fmt: skip
+        closed = np.vstack([c, c[:1]])
+        ax.plot(closed[:, 0], closed[:, 1], color="black", lw=1.2, zorder=2.3, gid="floorplan")
+    for ob in room.obstacles:
+        lo, hi = ob.lo, ob.hi
+        ax.add_patch(
+            Rectangle(
+                (lo[iu], lo[iv]),
+                hi[iu] - lo[iu],
+                hi[iv] - lo[iv],
+                facecolor=(0.3, 0.3, 0.3, 0.55),
+                edgecolor="black",
+                hatch="xx",
+                linewidth=0.8,
+                zorder=2.6,
+                gid="obstacles",
+            )  # fmt: skip
+        )
+        if (iu, iv) == (0, 1):
+            ax.annotate(f"{hi[2]:g} m", ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2), fontsize=6,
+                        ha="center", va="center", color="white", zorder=2.7)  # fmt: skip
+
+
+def _blank_outside(ax, room: Room, pts: np.ndarray, shape, extent) -> None:
+    """Cover the cells (``pts`` (n, 3), reshaped to ``shape``) outside the room (beyond
+    the floor plan or in an obstacle) in white, over a heat map."""
+    if room.is_shoebox and not room.obstacles:
+        return
+    outside = ~room.contains(pts).reshape(shape)
+    if not outside.any():
+        return
+    rgba = np.zeros((*outside.T.shape, 4))
+    rgba[outside.T] = (1.0, 1.0, 1.0, 1.0)
+    ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest", aspect="equal",
+              zorder=1.5)  # fmt: skip
+
+
 def _draw_regions2d(ax, room: Room, iu: int, iv: int) -> None:
-    """Keep-outs (hatched grey) and tag zones (dashed) projected onto the (iu, iv) plane."""
+    """Keep-outs (hatched grey) and tag zones (dashed) projected onto the (iu, iv) plane,
+    with a polygonal room's outline and its obstacles (:func:`_draw_room2d`)."""
     from matplotlib.patches import Rectangle
+
+    _draw_room2d(ax, room, iu, iv)
 
     for boxes, keepout in ((room.keepouts, True), (room.zones, False)):
         for lo, hi in boxes:
@@ -263,8 +319,10 @@ def peb_plane(
 
     Returns ``(u, v, values)``: cell-centre coordinates u (nu,), v (nv,) along the two
     other axes in increasing order and PEB values (nu, nv) in metres, +inf where the FIM
-    is singular; ``resolution`` is the cell size in metres and ``sigma`` the range σ (m),
-    for the anchors each point hears (:func:`analysis.coverage.heard_sigma`).
+    is singular or a point hears fewer than 4 anchors, NaN outside the room (beyond a
+    polygonal floor plan, in an obstacle); ``resolution`` is the cell size in metres and
+    ``sigma`` the range σ (m), for the anchors each point hears
+    (:func:`analysis.coverage.bound`).
     """
     if not isinstance(axis, int | str) or isinstance(axis, bool) or axis not in (0, 1, 2, *_AXES):
         raise ValueError(f"axis: must be 0, 1, 2 or 'x', 'y', 'z', got {axis!r}")
@@ -287,8 +345,10 @@ def peb_plane(
     pts[..., iu] = u[:, None]
     pts[..., iv] = v[None, :]
     flat = pts.reshape(-1, 3)
-    vals = _peb(anchors, flat, sigma=heard_sigma(room, anchors, flat, sigma)).reshape(nu, nv)
-    return u, v, vals
+    vals = _bound(room, anchors, flat, sigma)
+    if not room.is_shoebox or room.obstacles:
+        vals = np.where(room.contains(flat), vals, np.nan)
+    return u, v, vals.reshape(nu, nv)
 
 
 def peb_map(
@@ -327,6 +387,7 @@ def peb_map(
         raise ValueError("heights/x_cuts/y_cuts: at least one plane is required")
     maps = [peb_plane(room, anchors, k, c, sigma, resolution) for k, c in planes]
     allvals = np.concatenate([m[2].ravel() for m in maps])
+    allvals = allvals[~np.isnan(allvals)]  # outside the room
     norm, extend = _norm(allvals, scale, vmax=vmax)
     n = len(planes)
     ncols = ncols or (1 if n == 1 else 2 if n <= 4 else 3)
@@ -349,6 +410,11 @@ def peb_map(
             interpolation="nearest",
             aspect="equal",
         )
+        if np.isnan(vals).any():  # outside the room: white, not the singular grey
+            rgba = np.zeros((*vals.T.shape, 4))
+            rgba[np.isnan(vals.T)] = (1.0, 1.0, 1.0, 1.0)
+            ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest",
+                      aspect="equal", zorder=1.5)  # fmt: skip
         _draw_regions2d(ax, room, iu, iv)
         # white edges: visible on the dark and the bright end of viridis
         _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
@@ -414,15 +480,18 @@ def coverage_map(
     for ax, z in zip(axs, heights, strict=False):
         pts = np.stack(np.meshgrid(u, v, [z], indexing="ij"), axis=-1).reshape(-1, 3)
         count = _coverage(room, anchors, pts).reshape(nu, nv)
-        short = max(short, float(np.mean(count < 4)))
+        inside = room.contains(pts).reshape(nu, nv)
+        short = max(short, float(np.mean(count[inside] < 4)) if inside.any() else 0.0)
         extent = (0.0, L[0], 0.0, L[1])
         im = ax.imshow(count.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
                        interpolation="nearest", aspect="equal")  # fmt: skip
-        if np.any(count < 4):
-            ax.contourf(u, v, (count < 4).T.astype(float), levels=[0.5, 1.5], colors="none",
-                        hatches=["////"])  # fmt: skip
-            ax.contour(u, v, (count < 4).T.astype(float), levels=[0.5], colors="red",
-                       linewidths=1.0)  # fmt: skip
+        _blank_outside(ax, room, pts, (nu, nv), extent)
+        low = (count < 4) & inside
+        if np.any(low):
+            ax.contourf(u, v, low.T.astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=["////"], zorder=1.8)  # fmt: skip
+            ax.contour(u, v, low.T.astype(float), levels=[0.5], colors="red",
+                       linewidths=1.0, zorder=1.8)  # fmt: skip
         _draw_regions2d(ax, room, 0, 1)
         _numbered_anchors2d(ax, anchors, 0, 1, anchor_color, edge="white")
         ax.set_xlim(0, L[0])
@@ -468,32 +537,43 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
 
 
 def _draw_mounting2d(ax, room: Room, k: int) -> None:
-    """The mounting surfaces seen along axis ``k``: a surface parallel to the view as a
-    shaded rectangle, one across it as a thick line at its plane."""
+    """The mounting surfaces seen along axis ``k``: a surface parallel to the view as its
+    shaded allowed region, one across it as a thick line along its trace (for a shoebox's
+    walls, its plane)."""
+    from matplotlib.patches import Polygon as MPolygon
     from matplotlib.patches import Rectangle
+
+    from simulation.mounting import mounting_surfaces, regions
 
     iu, iv = (i for i in range(3) if i != k)
     L, o = room.size, room.anchor_offset
-    for name in room.mounting:
-        axis, side = SURFACES[name]
-        if axis == k:
-            ax.add_patch(
-                Rectangle(
-                    (o, o),
-                    L[iu] - 2 * o,
-                    L[iv] - 2 * o,
-                    facecolor=(0.85, 0.88, 0.93),
-                    edgecolor="none",
-                    zorder=0.5,
-                    gid="mounting",
-                )
-            )
+    if room.is_shoebox and not room.obstacles:  # the planes themselves, as always
+        for name in room.mounting:
+            axis, side = SURFACES[name]
+            if axis == k:
+                ax.add_patch(Rectangle((o, o), L[iu] - 2 * o, L[iv] - 2 * o,
+                                       facecolor=(0.85, 0.88, 0.93), edgecolor="none",
+                                       zorder=0.5, gid="mounting"))  # fmt: skip
+                continue
+            at = side * L[axis]
+            if axis == iu:
+                ax.plot([at, at], [0, L[iv]], color="0.35", lw=4, zorder=1, gid="mounting")
+            else:
+                ax.plot([0, L[iu]], [at, at], color="0.35", lw=4, zorder=1, gid="mounting")
+        return
+    lo, hi, idx = regions(room)[1]
+    for i, s in enumerate(mounting_surfaces(room)):
+        if abs(s.normal[k]) > 0.99:  # parallel to the view: its allowed rectangles
+            for a, b in zip(lo[idx == i], hi[idx == i], strict=True):
+                quad = s.point(np.array([a, [b[0], a[1]], b, [a[0], b[1]]]))[:, [iu, iv]]
+                ax.add_patch(MPolygon(quad, closed=True, facecolor=(0.85, 0.88, 0.93),
+                                      edgecolor="none", zorder=0.5, gid="mounting"))  # fmt: skip
             continue
-        at = side * L[axis]
-        if axis == iu:
-            ax.plot([at, at], [0, L[iv]], color="0.35", lw=4, zorder=1, gid="mounting")
-        else:
-            ax.plot([0, L[iu]], [at, at], color="0.35", lw=4, zorder=1, gid="mounting")
+        quad = s.point(np.array([s.lower, [s.upper[0], s.lower[1]], s.upper,
+                                 [s.lower[0], s.upper[1]]]))[:, [iu, iv]]  # fmt: skip
+        gap = np.linalg.norm(quad[:, None] - quad[None], axis=-1)
+        ends = quad[list(np.unravel_index(np.argmax(gap), gap.shape))]  # seen edge-on
+        ax.plot(ends[:, 0], ends[:, 1], color="0.35", lw=4, zorder=1, gid="mounting")
 
 
 def plan_view(

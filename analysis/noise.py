@@ -84,10 +84,11 @@ class PhysicalRangeNoise:
     reverberant room (millimetres, against centimetres to metres); use it to see the
     geometry of the SNR, and a calibrated σ to compare with simulation.
 
-    σ = inf (no information from that anchor, as the receiver reports no range) where the
-    anchor is not heard (:meth:`heard`): the direct path lies beyond the signal's reach or
-    within its near limit, or, for a receiver with a detection threshold η, its expected
-    correlation peak A_j(p)·‖g_k‖² stays below η·σ_w,j·‖g_k‖ (:mod:`simulation.receiver`).
+    σ = inf (no information from that anchor: the receiver gets no direct-path range) where
+    the anchor is not heard (:meth:`heard`): a wall or an obstacle blocks the line of sight,
+    the direct path lies beyond the signal's reach or within its near limit, or, for a
+    receiver with a detection threshold η, its expected correlation peak A_j(p)·‖g_k‖²
+    stays below η·σ_w,j·‖g_k‖ (:mod:`simulation.receiver`).
     """
 
     room: Room = field(default_factory=Room.techtile)
@@ -144,15 +145,18 @@ class PhysicalRangeNoise:
         return cnt * alpha**2 + 2 * alpha * beta * S1 + beta**2 * S2
 
     def heard(self, anchors, positions) -> np.ndarray:
-        """(..., P, M) bool: the receiver reports a range of anchor j at node p (class
-        docstring): the direct path within the signal's reach and, with a detection
-        threshold, its expected correlation peak above it."""
+        """(..., P, M) bool: the receiver reports a range of anchor j at node p from its
+        direct path (class docstring): a line of sight (no wall or obstacle between them,
+        :func:`simulation.polyhedral.line_of_sight`), the direct path within the signal's
+        reach and, with a detection threshold, its expected correlation peak above it."""
+        from simulation.polyhedral import line_of_sight
+
         a = np.asarray(anchors, dtype=float)
         p = np.asarray(positions, dtype=float)
         d = np.linalg.norm(p[:, None, :] - a[..., None, :, :], axis=-1)
         c = self.room.speed_of_sound
         lo, hi = self.signal.delays
-        out = (d / c >= lo) & (d / c <= hi)
+        out = (d / c >= lo) & (d / c <= hi) & line_of_sight(self.room, a, p)
         rx = self.receiver
         if rx.false_alarm is not None:
             from simulation.receiver import dsp_for

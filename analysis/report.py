@@ -42,8 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.coverage import heard_sigma
-from analysis.fim import peb
+from analysis.coverage import bound
 from analysis.report_data import (
     DEFAULT_SIGMA,
     Context,
@@ -178,7 +177,7 @@ def _context(result_dir, sigma, realizations: int, comparisons) -> Context:
         raise ValueError(f"sigma: must be > 0 m, got {sigma}")
     layouts = collect_layouts(data, room, nodes, comparisons)
     for e in layouts:
-        e.peb = peb(e.anchors, nodes, sigma=heard_sigma(room, e.anchors, nodes, sigma))
+        e.peb = bound(room, e.anchors, nodes, sigma)
     colors = layout_colors([e.name for e in layouts])
     return Context(
         Path(result_dir), data, room, nodes, sigma, layouts, colors, [], [], realizations

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.coverage import covered_share
 from analysis.fim import peb
 from analysis.report_data import EVALUATION_FILE, RESULT_FILE, Context, LayoutEntry
 from simulation.room import SURFACES, Room
@@ -202,6 +203,8 @@ def _headline(ctx: Context) -> list[str]:
             (_percent(st.get("availability")), "availability (share with a fix)"),
         ]
     cards.append((f"{_num(_summary(best.peb)['mean'])} m", "mean PEB"))
+    share = covered_share(ctx.room, best.anchors, ctx.nodes)
+    cards.append((_percent(share), "nodes hearing ≥ 4 anchors (line of sight, reach)"))
     for e in ctx.layouts[1:]:
         if e.role in ("comparison", "reference") and e.sim is not None:
             cards.append((f"{_num(e.sim.stats['std'])} m", f"σ of the {e.name} layout"))
@@ -419,6 +422,41 @@ def _other_coordinates(ctx: Context) -> list[str]:
     return parts
 
 
+def _walls(ctx: Context, room_dict: dict) -> list[str]:
+    """A polygonal room's walls (name, from, to, length, absorption) and its obstacles."""
+    room = ctx.room
+    parts = []
+    if not room.is_shoebox:
+        room_dict.pop("corners", None)
+        room_dict.pop("wall_names", None)
+        rows = [
+            [_e(w.name), _e(_num_list(w.start)), _e(_num_list(w.end)), _num(w.length, 2),
+             _num(room.absorption[w.name], 2)]
+            for w in room.walls
+        ]  # fmt: skip
+        parts += [
+            "<h3>Walls</h3>",
+            '<p class="sub">The floor plan’s walls in corner order (m), height '
+            f"{room.size[2]:g} m; floor α = {room.absorption['floor']:g}, ceiling α = "
+            f"{room.absorption['ceiling']:g}.</p>",
+            _table(["wall", "from (x, y)", "to (x, y)", "length (m)", "α"], rows, left=1),
+        ]
+    obstacles = room_dict.pop("obstacles", [])
+    if obstacles:
+        rows = [
+            [_e(o.get("name", "")), _e(_num_list(o["min"])), _e(_num_list(o["max"])),
+             _num(o.get("absorption"), 2), "yes" if o.get("mountable") else "no"]
+            for o in obstacles
+        ]  # fmt: skip
+        parts += [
+            "<h3>Obstacles</h3>",
+            '<p class="sub">Boxes standing in the room (m): they block and reflect sound and '
+            "hold no node; anchors may go on the faces of a mountable one.</p>",
+            _table(["name", "min (m)", "max (m)", "α", "mountable"], rows, left=1),
+        ]
+    return parts
+
+
 def _regions(ctx: Context, room_dict: dict) -> list[str]:
     room = ctx.room
     regions = [("keep-out", b) for b in room_dict.pop("keepouts", [])]
@@ -473,11 +511,12 @@ def _timings(timings) -> list[str]:
 def _settings_section(ctx: Context) -> list[str]:
     room, result, evaluation = ctx.room, ctx.result, ctx.evaluation
     room_dict = room.to_dict()
+    walls = _walls(ctx, room_dict)  # takes the floor plan and obstacles out of room_dict
     regions = _regions(ctx, room_dict)  # takes the boxes out of room_dict
     room_dict.pop("signal", None)
     parts = ["<h2>Settings</h2>", "<h3>Room</h3>"]
     parts.append(_kv({**room_dict, "speed_of_sound (m/s)": round(room.speed_of_sound, 3)}))
-    parts += regions
+    parts += walls + regions
     parts += _signal(room)
     if result is not None:
         keys = ("cost_name", "cost", "nfev", "nit", "success", "message")

@@ -958,7 +958,7 @@ def build_neighbour_cases() -> None:
 
 PHYSICS_KEYS = {
     "temperature", "max_order", "size", "sound_speed", "air_absorption", "humidity",
-    "duration", "chirp", "window",
+    "duration", "chirp", "window", "corners", "height", "obstacles",
 }  # fmt: skip
 TOML_CASES = [
     ("empty.toml", "", "empty"),
@@ -991,6 +991,33 @@ TOML_CASES = [
     ("signal3.toml", "[signal]\nwindow = 9000\n", "window"),
     ("signal4.toml", "[signal]\nchirp = 1\n", "signal"),
     ("signal5.toml", "signal = 3\n", "signal"),
+    # polygonal rooms and obstacles (issue 27)
+    ("poly1.toml", "corners = [[0, 0], [4, 0]]\nheight = 3\n", "corners"),
+    ("poly2.toml", "corners = [[0, 0], [4, 4], [4, 0], [0, 4]]\nheight = 3\n", "corners"),
+    ("poly3.toml", "corners = [[0, 0], [4, 0], [4, 0], [0, 4]]\nheight = 3\n", "corners"),
+    ("poly4.toml", "corners = [[0, 0], [4, 0], [0, 4]]\nheight = 0\n", "height"),
+    ("poly5.toml", "corners = [[0, 0], [4, 0], [0, 4]]\n", "height"),
+    (
+        "poly6.toml",
+        "corners = [[0, 0], [4, 0], [0, 4]]\nheight = 3\n[absorption]\nroof = 0.2\n",
+        "roof",
+    ),
+    (
+        "poly7.toml",
+        "corners = [[0, 0], [6, 0], [6, 3], [3, 3], [3, 6], [0, 6]]\nheight = 3\n"
+        "[[obstacle]]\nmin = [4, 4, 0]\nmax = [5, 5, 1]\n",
+        "obstacles",
+    ),
+    (
+        "poly8.toml",
+        "size = [4, 4, 3]\n[[obstacle]]\nmin = [1, 1, 0]\nmax = [1, 2, 1]\n",
+        "obstacles",
+    ),
+    (
+        "poly9.toml",
+        "size = [4, 4, 3]\n[[obstacle]]\nmin = [0, 0, 0]\nmax = [4, 4, 3]\n",
+        "obstacles",
+    ),
 ]
 
 

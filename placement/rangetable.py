@@ -107,19 +107,24 @@ def node_region(room: Room, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.ndarray:
     """(D, P, 3) node sets: the first ``exact_draws`` are ``nodes`` (P, 3); in the others
     every node moves uniformly within ±½ grid cell on each axis (:func:`cell_size`),
-    staying in its region (:func:`node_region`). Draw d moves by the stream (3, d) of the
+    staying in its region (:func:`node_region`; a node whose move would leave a polygonal
+    floor plan or enter an obstacle stays where it is). Draw d moves by the stream (3, d) of the
     int seed ``rng`` (a Generator is drawn once)."""
     seed = checks.entropy("rng", rng)
     p = np.asarray(nodes, dtype=float)
     half = cell_size(p) / 2
     lo, hi = node_region(room, p)
     out = np.empty((draws, *p.shape))
+    plain = room.is_shoebox and not room.obstacles
     for d in range(draws):
         if d < exact_draws:
             out[d] = p
         else:
             move = checks.stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
             out[d] = np.clip(p + move, lo, hi)
+            if not plain:  # a node that would leave the floor plan or enter an obstacle stays
+                stay = ~room.contains(out[d], margin=max(room.node_margin - 1e-9, 0.0))
+                out[d][stay] = p[stay]
     return out
 
 

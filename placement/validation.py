@@ -79,7 +79,21 @@ def held_out_grid(room: Room) -> np.ndarray:
 
 def random_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
     """(n, 3) uniform random points in the node region: the room less its node margin, or
-    the tag zones (chosen in proportion to their volume) within it."""
+    the tag zones (chosen in proportion to their volume) within it; in a polygonal room or
+    one with obstacles, inside the floor plan and outside the obstacles."""
+    if room.is_shoebox and not room.obstacles:
+        return _uniform_nodes(room, n, rng)
+    # a polygonal room or obstacles: draw until n points lie in the room (rejection)
+    margin = max(room.node_margin - 1e-9, 0.0)
+    out = np.empty((0, 3))
+    while len(out) < n:
+        p = _uniform_nodes(room, 2 * (n - len(out)) + 8, rng)
+        out = np.concatenate([out, p[room.contains(p, margin=margin)]])
+    return out[:n]
+
+
+def _uniform_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
+    """(n, 3) uniform points in the node region of the bounding box, or in its zones."""
     lo = np.full(3, room.node_margin)
     hi = np.asarray(room.size) - room.node_margin
     if not room.zones:

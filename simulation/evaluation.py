@@ -63,9 +63,12 @@ class RangingScene:
         n = len(self.nodes) * len(self.anchors) * self.receiver.window
         checks.check_size("nodes x anchors", n * 8 * 4, value=(len(self.nodes), len(self.anchors)))
         c = room.speed_of_sound
-        images = ImageSet.for_room(room)
+        # the shoebox's image set, computed once for the paths and the noise rule
+        images = ImageSet.for_room(room) if room.is_shoebox and not room.obstacles else None
         paths = compute_paths(room, self.anchors, self.nodes, images=images)
         self.distances = paths.length[:, :, 0]  # image 0 is the direct path
+        #: (P, M) bool: no wall or obstacle blocks the direct path
+        self.line_of_sight = paths.los
         air = room.air_excess()
         self.windows = received_windows(paths, c, self.chirp, self.receiver, air)
         self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images)
@@ -164,7 +167,8 @@ class Evaluation:
     distances; errors (R, P) Euclidean position errors (NaN where fewer than 4 anchors
     were heard: no fix); converged (R, P) solver flags; fix_status (R, P) the solver's
     status (:data:`simulation.positioning.STATUS_MESSAGES`); noise_sigma (M,) the AWGN σ
-    per anchor; seed the integer seed of the noise streams (``evaluate_layout(...,
+    per anchor; line_of_sight (P, M) whether nothing blocks each direct path; seed the
+    integer seed of the noise streams (``evaluate_layout(...,
     rng=seed)`` reproduces it). Statistics (``std`` population σ, ``mean``, ``p95``,
     ``rms``) are over the fixes among all R·P, and ``availability`` is the share of the
     R·P with a fix; per node, :attr:`dop` is the paper's DOP (standard deviation of the
@@ -185,6 +189,7 @@ class Evaluation:
     room: Room = field(repr=False)
     range_status: np.ndarray = field(default=None, repr=False)
     fix_status: np.ndarray = field(default=None, repr=False)
+    line_of_sight: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.range_status is None:  # built by hand: every range a range
@@ -192,6 +197,8 @@ class Evaluation:
             object.__setattr__(self, "range_status", heard)
         if self.fix_status is None:
             object.__setattr__(self, "fix_status", np.where(self.converged, 1, 0))
+        if self.line_of_sight is None:  # built by hand: nothing blocks
+            object.__setattr__(self, "line_of_sight", np.ones(self.ranges.shape[1:], bool))
 
     @property
     def realizations(self) -> int:
@@ -299,6 +306,7 @@ class Evaluation:
             "per_node": {
                 "availability": self.node_availability.tolist(),
                 "anchors_heard": self.anchors_heard.tolist(),
+                "anchors_in_sight": np.sum(self.line_of_sight, axis=-1).tolist(),
                 "rmse": self.rmse.tolist(),
                 "std": self.node_std.tolist(),
                 "dop": self.dop.tolist(),
@@ -431,4 +439,5 @@ def evaluate_layout(
         room=room,
         range_status=status,
         fix_status=fix.status,
+        line_of_sight=scene.line_of_sight,
     )

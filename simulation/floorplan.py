@@ -75,12 +75,13 @@ def normalize_corners(corners, wall_names=()) -> tuple[np.ndarray, tuple[str, ..
         )
     names = _wall_names(wall_names, len(c))
     poly = _polygon(c)
-    if poly.area <= 1e-9:
+    area = abs(float(np.sum(c[:, 0] * np.roll(c[:, 1], -1) - np.roll(c[:, 0], -1) * c[:, 1])))
+    if area <= 2e-9 and np.linalg.matrix_rank(c[1:] - c[0], tol=1e-9) < 2:
         raise ValueError(
             f"corners: the polygon has zero area (collinear corners {c.tolist()}); allowed: "
             "a simple polygon enclosing the floor"
         )
-    if not poly.exterior.is_simple or not poly.is_valid:
+    if not poly.exterior.is_simple or not poly.is_valid or poly.area <= 1e-9:
         raise ValueError(
             "corners: the polygon intersects itself; allowed: a simple polygon, corners in "
             f"order around the floor (got {c.tolist()})"

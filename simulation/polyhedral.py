@@ -185,10 +185,26 @@ def _on_reflector(kind, box, plan, f, p0, p1, p2, tol):  # pragma: no cover - co
 @numba.njit(cache=True, inline="always")
 def _blocked(a0, a1, a2, b0, b1, b2, kind, normal, d, box, blocking, plan, skip1, skip2):
     # pragma: no cover - compiled
-    """Whether the open segment a → b crosses a blocking reflector (other than skip1/2)."""
+    """Whether the open segment a → b crosses a blocking reflector (other than skip1/2).
+    A blocking reflector is a wall (box: its edge and height) or a face (box: lo, hi): the
+    segment's bounding box must meet the reflector's before the plane is intersected."""
     v0, v1, v2 = b0 - a0, b1 - a1, b2 - a2
+    s_lo0, s_hi0 = min(a0, b0), max(a0, b0)
+    s_lo1, s_hi1 = min(a1, b1), max(a1, b1)
+    s_lo2, s_hi2 = min(a2, b2), max(a2, b2)
     for g in range(kind.shape[0]):
         if not blocking[g] or g == skip1 or g == skip2:
+            continue
+        if kind[g] == 0:  # wall: x between its ends, y likewise, z within its height
+            r_lo0, r_hi0 = min(box[g, 0], box[g, 2]), max(box[g, 0], box[g, 2])
+            r_lo1, r_hi1 = min(box[g, 1], box[g, 3]), max(box[g, 1], box[g, 3])
+            r_lo2, r_hi2 = box[g, 4], box[g, 5]
+        else:
+            r_lo0, r_hi0 = box[g, 0], box[g, 3]
+            r_lo1, r_hi1 = box[g, 1], box[g, 4]
+            r_lo2, r_hi2 = box[g, 2], box[g, 5]
+        if (s_hi0 < r_lo0 or s_lo0 > r_hi0 or s_hi1 < r_lo1 or s_lo1 > r_hi1
+                or s_hi2 < r_lo2 or s_lo2 > r_hi2):  # fmt: skip
             continue
         den = normal[g, 0] * v0 + normal[g, 1] * v1 + normal[g, 2] * v2
         if abs(den) < 1e-15:
@@ -267,6 +283,18 @@ def _anchor_paths(nodes, lo, hi, chain, seq, order, kind, normal, d, box, blocki
             x2 = q2 + t * (img2 - q2)
             if not _on_reflector(kind, box, plan, f, x0, x1, x2, 1e-12):
                 continue
+            if k >= 2:  # the reflection before it, the same way, before the full trace
+                g = seq[i, k - 2]
+                dx = normal[g, 0] * x0 + normal[g, 1] * x1 + normal[g, 2] * x2 - d[g]
+                dg = (normal[g, 0] * chain[i, k - 1, 0] + normal[g, 1] * chain[i, k - 1, 1]
+                      + normal[g, 2] * chain[i, k - 1, 2] - d[g])  # fmt: skip
+                if dx <= EPS or dg >= 0.0:
+                    continue
+                u = dx / (dx - dg)
+                if not _on_reflector(kind, box, plan, g, x0 + u * (chain[i, k - 1, 0] - x0),
+                                     x1 + u * (chain[i, k - 1, 1] - x1),
+                                     x2 + u * (chain[i, k - 1, 2] - x2), 1e-12):  # fmt: skip
+                    continue
             if not _trace(q0, q1, q2, chain, seq, i, k, kind, normal, d, box, blocking, plan,
                           pts):  # fmt: skip
                 continue
@@ -352,3 +380,23 @@ def paths(room, anchors: np.ndarray, nodes: np.ndarray, refl: Reflectors | None 
         b[node, m, slot] = beta[image]
         valid[node, m, slot] = True
     return length, direction, b, valid, los
+
+
+def line_of_sight(room, anchors, points) -> np.ndarray:
+    """(..., P, M) bool: nothing blocks the straight segment from each point (P, 3) to
+    each anchor (..., M, 3) (walls of a non-convex floor plan, obstacle faces). All true
+    in a shoebox without obstacles."""
+    a = np.asarray(anchors, dtype=float)
+    p = np.ascontiguousarray(points, dtype=float)
+    out_shape = (*a.shape[:-2], p.shape[0], a.shape[-2])
+    if room.is_shoebox and not room.obstacles:
+        return np.ones(out_shape, dtype=bool)
+    refl = reflectors(room)
+    geo = (refl.kind, refl.normal, refl.d, refl.box, refl.blocking, refl.plan)
+    flat = a.reshape(-1, 3)
+    cols = [_direct_los(p, np.ascontiguousarray(s), *geo) for s in flat]
+    los = np.stack(cols, axis=-1) if cols else np.zeros((p.shape[0], 0), dtype=bool)
+    lead = a.shape[:-2]
+    M = a.shape[-2]
+    los = los.reshape(p.shape[0], *lead, M)
+    return np.moveaxis(los, 0, -2) if lead else los

@@ -45,8 +45,13 @@ def synthesize(
     *,
     lengths: np.ndarray | None = None,
     air=None,
+    grouped: bool = False,
 ) -> np.ndarray:
     """Noise-free windows (..., N) for path delays and amplitudes (..., I) (s, unit chirp).
+
+    ``grouped`` sums the windows in groups of similar path counts (a polygonal room's
+    windows hold from a few paths to a hundred; the result equals the ungrouped one to
+    rounding).
 
     ``air`` (a function f ↦ Δm(f) in 1/m, e.g. ``Room.air_excess()``) with the path
     ``lengths`` (..., I) in m applies the air's attenuation across the band (module
@@ -87,6 +92,33 @@ def synthesize(
     out = _synthesize_direct_rows(tau, amp, act & ~whole, chirp, receiver, dist, air)
     if not np.any(whole):
         return out.reshape(*lead, N)
+    groups = _groups(np.sum(whole, axis=1)) if grouped else [slice(None)]
+    for rows in groups:
+        out[rows] += _whole_windows(
+            u0[rows], amp[rows], whole[rows], None if dist is None else dist[rows], air,
+            chirp, receiver,
+        )  # fmt: skip
+    return out.reshape(*lead, N)
+
+
+#: windows per group of similar path counts (:func:`_groups`)
+GROUP = 2048
+
+
+def _groups(counts: np.ndarray) -> list:
+    """Windows by their number of whole-window paths (W,): one group (every window) when
+    the counts are even, as in a shoebox; else groups of similar counts, so that a window
+    with few paths is not padded to the most any window has."""
+    if counts.size <= GROUP or counts.max() <= 1.25 * max(np.median(counts), 1):
+        return [slice(None)]
+    order = np.argsort(counts, kind="stable")
+    return [order[i : i + GROUP] for i in range(0, len(order), GROUP)]
+
+
+def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver: Receiver) -> np.ndarray:
+    """(W, N) the sum of the whole-window paths (``whole`` (W, I)) of windows whose chirp
+    times at sample 0 are ``u0`` (W, I) (:func:`synthesize`'s fast form)."""
+    n_win, N, fs = len(u0), receiver.window, receiver.fs
     # gather the whole-window paths of each window to the front, drop empty columns
     order = np.argsort(~whole, axis=1, kind="stable")
     width = int(np.max(np.sum(whole, axis=1)))
@@ -117,8 +149,7 @@ def synthesize(
     z = np.matmul(eq.transpose(0, 2, 1), er).reshape(n_win, nq * Q)[:, :N]
     n = np.arange(N)
     quad = np.exp(1j * (np.pi * k / fs**2) * (n * n))
-    out += quad.real * z.imag + quad.imag * z.real
-    return out.reshape(*lead, N)
+    return quad.real * z.imag + quad.imag * z.real
 
 
 def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Receiver):
@@ -198,4 +229,5 @@ def received_windows(
         receiver,
         lengths=paths.length,
         air=air,
+        grouped=paths.line_of_sight is not None,  # traced paths: uneven counts
     )

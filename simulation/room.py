@@ -554,6 +554,8 @@ class Room:
     def reflections(self) -> np.ndarray:
         """(3, 2) reflection amplitudes β of a shoebox indexed by [axis, side] (side 0: plane
         at 0)."""
+        if not self.is_shoebox:
+            raise ValueError("reflections: a polygonal room has no shoebox planes (see walls)")
         b = np.empty((3, 2))
         for name, (axis, side) in SURFACES.items():
             b[axis, side] = self.reflection(name)

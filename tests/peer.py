@@ -112,3 +112,104 @@ def pra_windows(
     finally:
         pra.constants.set("rir_hpf_enable", old_hpf)
     return out / (4 * np.pi) if scale_to_ours else out
+
+
+def pra_walls(room: Room):
+    """pyroomacoustics walls of a polygonal room or one with obstacles: the walls over the
+    floor plan's edges, floor and ceiling (``extrude``'s construction: normals out of the
+    room) and the obstacle faces not on the room's boundary (``wall_factory``, normals into
+    the obstacle, away from the air), with our absorption."""
+    import pyroomacoustics as pra
+
+    h = room.size[2]
+    c = room.floor_corners
+    n = len(c)
+    walls = []
+
+    def add(corners, alpha, name):
+        walls.append(
+            pra.wall_factory(
+                np.asarray(corners, float).T, np.array([alpha]), np.array([0.0]), name=name
+            )  # fmt: skip
+        )
+
+    for i, w in enumerate(room.walls):
+        a, b = c[i], c[(i + 1) % n]
+        add([[*a, 0], [*b, 0], [*b, h], [*a, h]], room.absorption[w.name], w.name)
+    add([[x, y, 0.0] for x, y in c[::-1]], room.absorption["floor"], "floor")
+    add([[x, y, h] for x, y in c], room.absorption["ceiling"], "ceiling")
+    from simulation.floorplan import face_rectangles
+
+    faces = []  # every face, also those on the room's boundary: pyroomacoustics' inside test
+    for k, ob in enumerate(room.obstacles):  # counts crossings and needs closed boxes
+        for axis, side, flo, fhi in face_rectangles(ob):
+            normal = np.zeros(3)
+            normal[axis] = -1.0 if side == 0 else 1.0
+            faces.append((flo, fhi, axis, normal, ob.absorption, f"{ob.name or k}:{axis}{side}"))
+    for lo, hi, axis, out_normal, alpha, name in faces:
+        u, v = (j for j in range(3) if j != axis)
+        quad = []
+        for du, dv in ((0, 0), (1, 0), (1, 1), (0, 1)):
+            q = lo.copy()
+            q[u] = (lo, hi)[du][u]
+            q[v] = (lo, hi)[dv][v]
+            quad.append(q)
+        quad = np.array(quad)
+        normal = np.cross(quad[1] - quad[0], quad[2] - quad[1])
+        if normal @ out_normal > 0:  # pyroomacoustics' normal points away from the air
+            quad = quad[::-1]
+        add(quad, alpha, name)
+    return walls
+
+
+def pra_general_windows(
+    room: Room,
+    anchors,
+    nodes,
+    fs_rir: float = 1e6,
+    air_absorption: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(windows (P, M, N), line of sight (P, M)) of a polygonal room or one with obstacles,
+    simulated with pyroomacoustics' general image-source model (``pra.Room`` from
+    :func:`pra_walls`), omnidirectional speakers (its general rooms have no source
+    directivity), the room's signal; windows scaled to ours (÷ 4π) as in
+    :func:`pra_windows`."""
+    import pyroomacoustics as pra
+    import scipy.signal
+
+    chirp, rx = room.signal.chirp, room.signal.receiver
+    a = np.asarray(anchors, dtype=float)
+    p = np.asarray(nodes, dtype=float)
+    ratio = Fraction(rx.fs / fs_rir).limit_denominator(10000)
+    sig = chirp.samples(fs_rir)
+    fdl2 = pra.constants.get("frac_delay_length") // 2
+    start = int(round(rx.t_wake * rx.fs))
+    N = rx.window
+    keep = int(math.ceil((rx.t_wake + N / rx.fs) * fs_rir)) + 400
+    out = np.zeros((len(p), len(a), N))
+    los = np.zeros((len(p), len(a)), dtype=bool)
+    old_hpf = pra.constants.get("rir_hpf_enable")
+    pra.constants.set("rir_hpf_enable", False)
+    try:
+        for j in range(len(a)):
+            proom = pra.Room(pra_walls(room), fs=int(round(fs_rir)), max_order=room.max_order,
+                             air_absorption=False)  # fmt: skip
+            proom.set_sound_speed(room.speed_of_sound)
+            if air_absorption and room.air_reference > 0:
+                proom.air_absorption = np.array([room.air_reference])
+            proom.add_source(a[j].tolist())
+            proom.add_microphone_array(p.T.copy())
+            proom.compute_rir()
+            src = proom.sources[0]
+            direct = np.flatnonzero(src.orders == 0)
+            vis = proom.visibility[0]
+            los[:, j] = vis[:, direct[0]] > 0 if direct.size else False
+            for i in range(len(p)):
+                h = np.asarray(proom.rir[i][0], dtype=float)[fdl2:]
+                y = scipy.signal.fftconvolve(sig, h[:keep])[:keep]
+                y192 = scipy.signal.resample_poly(y, ratio.numerator, ratio.denominator)
+                seg = y192[start : start + N]
+                out[i, j, : len(seg)] = seg
+    finally:
+        pra.constants.set("rir_hpf_enable", old_hpf)
+    return out / (4 * np.pi), los

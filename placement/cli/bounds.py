@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
-from analysis import error_stats, heard_sigma, peb
+from analysis import bound, error_stats
 from analysis.noise import SIGMA_RANGE
-from placement.cli.common import add_room_argument, load_layout, load_room, output_file, write_json
+from placement.cli.common import (
+    add_room_argument,
+    describe_room,
+    load_layout,
+    load_room,
+    output_file,
+    write_json,
+)
 from simulation import checks
 
 
@@ -32,9 +39,9 @@ def run(args) -> int:
     room = load_room(args.room)
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()
-    values = peb(anchors, nodes, sigma=heard_sigma(room, anchors, nodes, args.sigma))
+    values = bound(room, anchors, nodes, args.sigma)
     stats = error_stats(values)
-    print(f"room {room.name} {room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m")
+    print(f"room {room.name}: {describe_room(room)}")
     print(f"{len(anchors)} anchors, {len(nodes)} nodes, range sigma {args.sigma:g} m")
     geometry = checks.geometry(anchors)
     if geometry != "3d":

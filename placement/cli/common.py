@@ -16,6 +16,7 @@ __all__ = [
     "add_room_argument",
     "add_signal_arguments",
     "apply_signal",
+    "describe_room",
     "describe_signal",
     "load_layout",
     "load_room",
@@ -111,6 +112,19 @@ def apply_signal(args, room: Room) -> Room:
         ]
         raise ValueError(f"{flags[0] if flags else 'signal'}: {text.strip()}") from None
     return dataclasses.replace(room, signal=signal)
+
+
+def describe_room(room: Room) -> str:
+    """The room in a few words: its size, or its floor plan, and its obstacles."""
+    L = room.size
+    if room.is_shoebox:
+        text = f"{L[0]:g} x {L[1]:g} x {L[2]:g} m"
+    else:
+        text = f"{len(room.corners)}-corner floor plan in {L[0]:g} x {L[1]:g} m, {L[2]:g} m high"
+    if room.obstacles:
+        n = len(room.obstacles)
+        text += f", {n} obstacle{'s' if n > 1 else ''}"
+    return text
 
 
 def describe_signal(room: Room) -> str:

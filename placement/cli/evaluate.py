@@ -10,6 +10,7 @@ from placement.cli.common import (
     add_signal_arguments,
     apply_signal,
     availability_note,
+    describe_room,
     describe_signal,
     load_layout,
     load_room,
@@ -69,7 +70,7 @@ def run(args) -> int:
     data["seconds"] = seconds
     out = write_json(Path(out_dir) / "evaluation.json", data)
     st = ev.stats
-    print(f"room {room.name} {room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m")
+    print(f"room {room.name}: {describe_room(room)}")
     print(
         f"{len(anchors)} anchors, {len(ev.nodes)} nodes, {ev.realizations} realization(s), "
         f"seed {args.seed}, SNR {ev.snr_db:g} dB, {seconds:.1f} s"

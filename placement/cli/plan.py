@@ -11,6 +11,7 @@ from placement.cli.common import (
     add_signal_arguments,
     apply_signal,
     availability_note,
+    describe_room,
     describe_signal,
     load_room,
     output_dir,
@@ -225,7 +226,7 @@ def run(args) -> int:
         workers = args.workers or available_cores()
         print(
             f"planning {args.anchors} anchors in {room.name} "
-            f"({room.size[0]:g} x {room.size[1]:g} x {room.size[2]:g} m), cost {args.cost}, "
+            f"({describe_room(room)}), cost {args.cost}, "
             f"seed {args.seed}, {workers if executor is not None else 1} worker(s)",
             flush=True,
         )
