@@ -43,6 +43,7 @@ from analysis.fim import peb as _peb
 from analysis.statistics import ecdf, error_stats
 from simulation import checks
 from simulation.directivity import aim_vectors
+from simulation.mounting import mounting_surfaces as _mounting_surfaces
 from simulation.room import SURFACES, Room, as_room
 
 #: colour-blind-friendly qualitative palette (Okabe–Ito without black, plus extras)
@@ -503,8 +504,8 @@ def coverage_map(
         ax.set_visible(False)
     cb = fig.colorbar(im, ax=list(axs[:n]), shrink=0.9, ticks=range(M + 1))
     cb.set_label("anchors heard")
-    note = f"; red hatching: fewer than 4 ({100 * short:.1f} % of a slice at most)" if short else ""
-    fig.suptitle(f"Coverage: anchors heard (reach {room.reach:.2f} m), M = {M}{note}", fontsize=11)
+    note = f"; hatched: < 4 heard (≤ {100 * short:.1f} % of a slice)" if short else ""
+    fig.suptitle(f"Anchors heard, M = {M}, reach {room.reach:.2f} m{note}", fontsize=10)
     return fig
 
 
@@ -675,18 +676,33 @@ def _room_box(ax, room: Room, zoom: float = 1.0) -> None:
 
     L = np.asarray(room.size, dtype=float)
     c = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], float) * L
-    edges = [
-        (c[a], c[b])
-        for a in range(8)
-        for b in range(a + 1, 8)
-        if np.count_nonzero(c[a] != c[b]) == 1
-    ]
-    ax.add_collection3d(Line3DCollection(edges, colors="0.45", linewidths=0.7, gid="room"))
     faces = []
-    for name in room.mounting:
-        axis, side = SURFACES[name]
-        face = c[c[:, axis] == side * L[axis]]
-        faces.append(face[[0, 1, 3, 2]])  # corners in cyclic order
+    if room.is_shoebox:
+        edges = [
+            (c[a], c[b])
+            for a in range(8)
+            for b in range(a + 1, 8)
+            if np.count_nonzero(c[a] != c[b]) == 1
+        ]
+        for name in room.mounting:
+            axis, side = SURFACES[name]
+            face = c[c[:, axis] == side * L[axis]]
+            faces.append(face[[0, 1, 3, 2]])  # corners in cyclic order
+    else:  # the floor plan's outline at the floor and the ceiling, and its vertical edges
+        fc = room.floor_corners
+        low = np.column_stack([fc, np.zeros(len(fc))])
+        high = np.column_stack([fc, np.full(len(fc), L[2])])
+        ring = list(range(len(fc))) + [0]
+        edges = [(low[a], low[b]) for a, b in zip(ring[:-1], ring[1:], strict=True)]
+        edges += [(high[a], high[b]) for a, b in zip(ring[:-1], ring[1:], strict=True)]
+        edges += [(low[a], high[a]) for a in range(len(fc))]
+        for s in _mounting_surfaces(room):
+            faces.append(s.point(np.array([s.lower, [s.upper[0], s.lower[1]], s.upper,
+                                           [s.lower[0], s.upper[1]]])))  # fmt: skip
+    for ob in room.obstacles:
+        b = _box_corners(ob.lo, ob.hi)
+        edges += [(b[a], b[k]) for a, k in _EDGES]
+    ax.add_collection3d(Line3DCollection(edges, colors="0.45", linewidths=0.7, gid="room"))
     ax.add_collection3d(
         Poly3DCollection(faces, facecolors="0.5", alpha=0.07, edgecolors="none", gid="mounting")
     )
