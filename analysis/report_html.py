@@ -187,6 +187,9 @@ def _head(ctx: Context) -> list[str]:
         f"<h1>anchorplan report — {_e(room.name)}, M = {len(best.anchors)}</h1>",
         f'<p class="sub">{_e(name)}: {_e(sources)} · generated {_e(now)} · PEB = √tr J⁻¹ in '
         f"metres at constant σ<sub>r</sub> = {ctx.sigma:g} m</p>",
+        f'<p class="sub">Signal and receiver: {_e(room.signal.describe())}; reach '
+        f"{room.reach:.2f} m. The errors are this receiver's: its window and pick change "
+        "them more than the layout does (BENCHMARKS.md, “The receiver”).</p>",
     ]
 
 
@@ -491,8 +494,10 @@ def _signal(room: Room) -> list[str]:
         "<h3>Signal</h3>",
         '<p class="sub">The transmitted chirp and the receiver (durations in s, frequencies '
         "in Hz, window in samples). The reach is the longest range whose chirp the window "
-        "holds; a receiver without a false-alarm setting has no detection threshold (the "
-        "paper's).</p>",
+        "holds enough of (1 ms, or all of a shorter window); a receiver without a "
+        "false-alarm setting has no detection threshold (the paper's); the pick is the "
+        "paper's (the strongest arrival) or the first path's (the earliest that stands "
+        "out).</p>",
         _kv(d),
     ]
 

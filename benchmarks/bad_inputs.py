@@ -632,13 +632,17 @@ def _signal_physics_cases() -> None:
     signal_cases = [
         ("inverted band", "chirp", dict(chirp=Chirp(f0=45e3, f1=25e3))),
         ("band above fs/2", "chirp", dict(chirp=Chirp(f1=120e3))),
-        ("window longer than the chirp", "window",
-         dict(chirp=Chirp(duration=0.01), receiver=Receiver(t_wake=0.0, window=4000))),
         ("a 1 s chirp at 10 MHz (tens of GB of DSP)", "chirp duration x fs x window",
          dict(chirp=Chirp(duration=1.0, f1=450e3), receiver=Receiver(fs=10e6))),
     ]  # fmt: skip
     for label, name, kw in signal_cases:
         api("physics", f"Signal({label})", name, lambda kw=kw: Signal(**kw))
+    # a window closing after the chirp's end plus the room's longest flight (issue 28)
+    late = Signal(receiver=Receiver(t_wake=0.0, window=20000))
+    api("physics", "Room(window after the last arrival)", "window", lambda: Room(signal=late))
+    for arg, v in (("pick", "last"), ("first_path_ratio", 0.0), ("first_path_ratio", 1.5),
+                   ("first_path_noise", -1.0)):  # fmt: skip
+        api("physics", f"Receiver({arg}={v!r})", arg, lambda a=arg, v=v: Receiver(**{a: v}))
     for arg, v in (("false_alarm", 0.0), ("false_alarm", 0.9), ("false_alarm", "x")):
         api("physics", f"Receiver({arg}={v!r})", arg, lambda a=arg, v=v: Receiver(**{a: v}))
     for arg, v in (("humidity", 101.0), ("humidity", -5), ("pressure", 0.0),
@@ -1104,6 +1108,7 @@ def _cli_number_cases(tmp: Path) -> None:
         ("--t-wake", ["-1"]),
         ("--window", ["5", "100000"]),
         ("--false-alarm", ["0", "0.9"]),
+        ("--pick", ["last"]),
         ("--search-starts", ["-1"]),
         ("--search-realizations", ["0", "1000"]),
         ("--cost", ["median"]),

@@ -184,11 +184,12 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
         else:
             scene = RangingScene(room, mounted, nodes[d], precision=spec["precision"])
             exact_scene = scene if exact else None
+        dtype = scene.windows.dtype  # single precision for a long window's FFT DSP
         noise = np.stack(
             [
-                s
+                dtype.type(s)
                 * checks.stream(spec["seed"], 0, int(j), d).standard_normal(
-                    scene.windows.shape[::2]
+                    scene.windows.shape[::2], dtype=dtype
                 )
                 for s, j in zip(scene.noise_sigma, ids, strict=True)
             ],

@@ -70,9 +70,14 @@ class RangingScene:
         #: (P, M) bool: no wall or obstacle blocks the direct path
         self.line_of_sight = paths.los
         air = room.air_excess()
-        self.windows = received_windows(paths, c, self.chirp, self.receiver, air)
-        self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images)
         self.dsp = dsp_for(self.chirp, self.receiver, precision)
+        #: the windows' and their noise's dtype: single precision for a long window's
+        #: single-precision DSP (FFT form), which reads no more; double otherwise
+        self.dtype = np.dtype(np.float32 if self.dsp.form == "fft" and precision == "float32"
+                              else np.float64)  # fmt: skip
+        windows = received_windows(paths, c, self.chirp, self.receiver, air)
+        self.windows = windows.astype(self.dtype, copy=False)
+        self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -90,9 +95,16 @@ class RangingScene:
     def _to_ranges(self, windows: np.ndarray) -> np.ndarray:
         return self.detect(windows)[0]
 
+    def noise(self, rng: np.random.Generator, shape=None) -> np.ndarray:
+        """σ_j · N(0, 1) noise of shape ``shape`` (default the windows', (P, M, N); any
+        shape ending in (M, N)) from ``rng``, in the windows' dtype."""
+        shape = self.windows.shape if shape is None else shape
+        sigma = self.noise_sigma.astype(self.dtype, copy=False)
+        return sigma[:, None] * rng.standard_normal(shape, dtype=self.dtype)
+
     def noisy_windows(self, rng: np.random.Generator) -> np.ndarray:
         """(P, M, N) received windows of one realization: clean + σ_j · N(0, 1) from ``rng``."""
-        return self.windows + self.noise_sigma[:, None] * rng.standard_normal(self.windows.shape)
+        return self.windows + self.noise(rng)
 
     def ranges(self, rng: np.random.Generator | None = None, noise: bool = True) -> np.ndarray:
         """(P, M) estimated ranges in metres (NaN: no range) for one realization drawn

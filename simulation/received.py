@@ -22,6 +22,7 @@ chirp's instantaneous bandwidth (docs/model.md, "Air absorption").
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from simulation import checks
@@ -88,6 +89,8 @@ def synthesize(
         dist = np.asarray(lengths, dtype=float).reshape(n_win, -1)
     act = active_paths(tau, amp, chirp, receiver)
     u0 = receiver.t_wake - tau
+    if N >= LONG_WINDOW:
+        return _long_windows(u0, amp, act, dist, air, chirp, receiver).reshape(*lead, N)
     whole = act & (u0 >= 0) & (u0 + (N - 1) / fs <= chirp.duration)
     out = _synthesize_direct_rows(tau, amp, act & ~whole, chirp, receiver, dist, air)
     if not np.any(whole):
@@ -103,6 +106,78 @@ def synthesize(
 
 #: windows per group of similar path counts (:func:`_groups`)
 GROUP = 2048
+#: windows of this many samples and more (longer than the paper's 192) are synthesized by
+#: :func:`_long_windows`
+LONG_WINDOW = 256
+
+
+def _long_windows(u0, amp, act, dist, air, chirp: Chirp, receiver: Receiver) -> np.ndarray:
+    """(W, N) the sum of the active paths (``act`` (W, I)) of long windows, whose chirp
+    may start and end inside the window: :func:`synthesize`'s fast form with each path
+    restricted to the samples its chirp covers, n ∈ [a, b] with 0 ≤ u0 + n/fs ≤ T.
+
+    Compiled (:func:`_long_kernel`): per path, the powers e^{βr}, r < Q, once, then block
+    by block n = Q·q + r the block's power times them, over the blocks its support holds
+    (the first and last ones in part)."""
+    n_win, N, fs = len(u0), receiver.window, receiver.fs
+    a = np.clip(np.ceil(-u0 * fs), 0, N).astype(np.int64)
+    b = np.clip(np.floor((chirp.duration - u0) * fs), -1, N - 1).astype(np.int64)
+    w_amp = np.where(act & (b >= a), amp, 0.0)
+    k = chirp.rate
+    alpha = 2 * np.pi * (chirp.f0 * u0 + 0.5 * k * u0 * u0)
+    step = 1j * (2 * np.pi * (chirp.f0 + k * u0) / fs)  # per sample: e^{iβ}
+    weights = w_amp * np.exp(1j * alpha)
+    if air is not None:  # the air's envelope linearized at the centre of each support
+        log0, slope = _air_envelope(air, dist, u0, chirp, receiver, 0.5 * (a + b))
+        weights = weights * np.exp(np.where(w_amp != 0, log0, 0.0))
+        step = step + np.where(w_amp != 0, slope, 0.0)
+    n = np.arange(N)
+    quad = np.exp(1j * (np.pi * k / fs**2) * (n * n))
+    out = np.empty((n_win, N))
+    _long_kernel(weights.real.copy(), weights.imag.copy(), step.real.copy(), step.imag.copy(),
+                 a, b, quad.real.copy(), quad.imag.copy(), out)  # fmt: skip
+    return out
+
+
+@numba.njit(cache=True)
+def _long_kernel(w_re, w_im, s_re, s_im, a, b, q_re, q_im, out):  # pragma: no cover - compiled
+    """out[w, n] = Im(quad[n] · Σ_i w_i e^{s_i n} [a_i ≤ n ≤ b_i]) for windows w, paths i:
+    weights w = w_re + i w_im, per-sample log-steps s (W, I), supports [a, b] (W, I)."""
+    n_win, n_path = w_re.shape
+    N = out.shape[1]
+    Q = 64
+    z_re = np.empty(N)
+    z_im = np.empty(N)
+    e_re = np.empty(Q)
+    e_im = np.empty(Q)
+    for w in range(n_win):
+        z_re[:] = 0.0
+        z_im[:] = 0.0
+        for i in range(n_path):
+            lo, hi = a[w, i], b[w, i]
+            if hi < lo or (w_re[w, i] == 0.0 and w_im[w, i] == 0.0):
+                continue
+            step = complex(s_re[w, i], s_im[w, i])
+            one = np.exp(step)
+            e = 1.0 + 0.0j
+            for r in range(Q):  # e^{s r}
+                e_re[r] = e.real
+                e_im[r] = e.imag
+                e = e * one
+            big = np.exp(Q * step)
+            q0, q1 = lo // Q, hi // Q
+            p = complex(w_re[w, i], w_im[w, i]) * np.exp(Q * q0 * step)
+            for q in range(q0, q1 + 1):
+                base = q * Q
+                r0 = max(lo - base, 0)
+                r1 = min(hi - base, Q - 1)
+                pr, pi = p.real, p.imag
+                for r in range(r0, r1 + 1):
+                    z_re[base + r] += pr * e_re[r] - pi * e_im[r]
+                    z_im[base + r] += pr * e_im[r] + pi * e_re[r]
+                p = p * big
+        for n in range(N):
+            out[w, n] = q_re[n] * z_im[n] + q_im[n] * z_re[n]
 
 
 def _groups(counts: np.ndarray) -> list:
@@ -152,11 +227,13 @@ def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver: Receiver) 
     return quad.real * z.imag + quad.imag * z.real
 
 
-def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Receiver):
+def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Receiver, n_mid=None):
     """ln of the air envelope exp(−½ d Δm(f)) linear in the sample n across the window:
-    (value at n = 0, slope per sample), from Δm and its derivative at the window's centre
-    frequency, for paths of lengths d whose chirp time at sample 0 is u0 (same shapes)."""
-    n_mid = 0.5 * (receiver.window - 1)
+    (value at n = 0, slope per sample), from Δm and its derivative at the frequency of
+    sample ``n_mid`` (default the window's centre), for paths of lengths d whose chirp time
+    at sample 0 is u0 (same shapes)."""
+    if n_mid is None:
+        n_mid = 0.5 * (receiver.window - 1)
     f_mid = chirp.f0 + chirp.rate * (u0 + n_mid / receiver.fs)
     h = 1.0  # Hz: a central difference of a function smooth on the scale of kHz
     dm = air(f_mid)

@@ -10,14 +10,35 @@ after the chirp starts. Each received window x (N,) goes through
 3. a zero-phase FIR low-pass (1000 taps, 5 kHz, ``firwin``): the filtfilt-equivalent
    convolution of a with h ⋆ h (the FIR's autocorrelation, frequency response |H|²),
    centred, with zero boundaries: ``scipy.signal.convolve(a, h ⋆ h, "same")``;
-4. k = argmax of the low-passed curve, snapped to the nearest local maximum of a (ties to
-   the lower index);
+4. the pick (``Receiver.pick``):
+
+   - ``"paper"``: k = argmax of the low-passed curve (the strongest arrival);
+   - ``"first-path"``: k = the top of the earliest lobe that stands out. The lobes are the
+     runs of lags where the low-passed curve is at least ρ' times its maximum, ρ' the
+     larger of ρ (``first_path_ratio``) and twice the chain's own sidelobe level for the
+     strongest arrival's delay (:func:`sidelobe_profile`: a lobe lower than that may be
+     the strongest arrival's sidelobe, lifted by noise, not an earlier path); the
+     earliest is the one with the largest lags (the shortest time of flight), and k is
+     the argmax of the curve within it, kept when that top is at least κ times the
+     curve's mean under noise alone, κ·σ·√(2/π)·‖g_k‖ (``first_path_noise``; σ and
+     ‖g_k‖ as under *Detection* below; a pick without a known σ skips this test), else
+     the global argmax. The direct path is the first to arrive, and a reflection can
+     outshine it (a speaker aimed away, a grazing direct path), so the strongest peak is
+     not always the direct one; where the direct path's lobe and an echo's merge, the
+     pick is the paper's (docs/model.md, "The first-path pick");
+
+   then k is snapped to the nearest local maximum of a (ties to the lower index);
 5. the window starts at chirp sample s = k + 1 − N, so τ = (t_wake·fs − s)/fs, r = c·τ;
 6. the range is kept only when the direct path's time of flight lies within the signal's
    reach (:mod:`simulation.signal`: the window can hold its chirp) and the chirp was heard:
    the window has a peak (|c[k]| > 0) and, with a detection threshold (``false_alarm``
-   set), |c[k]| > η·σ·‖g_k‖ with the picked time of flight τ̂ within the reach too;
-   otherwise the receiver reports "no range" (NaN, with a status of :data:`RANGE_STATUS`).
+   set), |c[k]| > η·σ·‖g_k‖ with the picked time of flight τ̂ within the reach too; a
+   picked τ̂ < 0 (a chirp that arrived before it was sent: the pick caught a fragment,
+   possible when the window opens early in the chirp) is no range, except that the
+   paper's receiver (the paper's pick, no threshold) reports its picks down to
+   c·τ̂ = :data:`RANGE_FLOOR`, as the paper's chain does (its window, 29 ms into the
+   chirp, keeps them above −0.35 m); otherwise the receiver reports "no range" (NaN, with
+   a status of :data:`RANGE_STATUS`).
 
 Detection (docs/model.md, "Detection"). For white noise of σ per sample, c = G x is
 Gaussian at every lag k with standard deviation σ·‖g_k‖, g_k the k-th row of the linear map
@@ -34,17 +55,24 @@ its error, not a missing range).
 
 :func:`reference_chain` is this chain written literally (one window at a time) and the
 definition. :class:`Dsp` is the batched fast form used by the simulator, which gives the
-same index (tested on thousands of clean, noisy and reverberant windows): steps 1–2 are
+same index (tested on thousands of clean, noisy and reverberant windows). Steps 1–2 are
 linear in x (``sosfiltfilt`` with odd padding and scaled initial conditions is a linear map
-of the window), so they are folded into one (Nc, N) matrix G applied to a batch with one
-matrix product; step 3 is a product with |H|² in the frequency domain (one rfft and one
-irfft of size ≥ Nc + taps − 1, no wrap-around), in blocks that can run on several threads.
+of the window). Short windows (the paper's) fold them into one (Nc, N) matrix G applied to
+a batch with one matrix product. Long windows (:data:`FFT_MIN_WINDOW` samples and more),
+where G would be large and its product slow, use FFTs: the zero-phase high-pass is a
+convolution with its two-sided impulse response k (2L + 1 taps, L where it has decayed
+below double precision) plus exact corrections E_top, E_bot (L × L) for the padding and
+initial conditions at the two ends of the window, then the correlation is a product with
+the reference's spectrum. Step 3 is a product with |H|² in the frequency domain (one rfft
+and one irfft of size ≥ Nc + taps − 1, no wrap-around), in blocks that can run on several
+threads.
 
 The float64 chain is bound by that product and the two FFTs (docs/implementation.md).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -54,6 +82,7 @@ import scipy.fft
 
 from simulation import checks
 from simulation.chirp import Chirp
+from simulation.positioning import RANGE_FLOOR  # the lowest range positioning accepts
 
 #: accepted false-alarm probability per window of the detection (exclusive of 0)
 FALSE_ALARM_RANGE = (0.0, 0.5)
@@ -62,8 +91,13 @@ FALSE_ALARM_RANGE = (0.0, 0.5)
 RANGE_STATUS = {
     0: "heard: a range",
     1: "not heard: no correlation peak above the detection threshold",
-    2: "out of reach: the time of flight lies outside the signal's reach",
+    2: "out of reach: the time of flight lies outside the signal's reach (or the pick gives "
+    "a negative one)",
 }
+#: the peak picks of the receiver (module docstring, step 4)
+PICKS = ("paper", "first-path")
+#: windows of this many samples and more run the DSP with FFTs instead of one matrix
+FFT_MIN_WINDOW = 1024
 HEARD, NOT_HEARD, OUT_OF_REACH = 0, 1, 2
 
 
@@ -76,6 +110,10 @@ class Receiver:
     lowpass_taps, lowpass_cutoff (Hz) : the DSP filters. false_alarm : the detection
     threshold's bound on the probability that a window of noise alone gives a range
     (module docstring), in (0, 0.5); None (the paper's receiver): no threshold.
+    pick : ``"paper"`` (the strongest arrival) or ``"first-path"`` (the earliest arrival
+    that stands out; module docstring, step 4). first_path_ratio : ρ in (0, 1], the share
+    of the strongest peak a first path must reach. first_path_noise : κ ≥ 0, the multiple
+    of the noise-only mean of the low-passed curve it must reach (0: no noise test).
     """
 
     fs: float = 192e3
@@ -86,6 +124,9 @@ class Receiver:
     lowpass_taps: int = 1000
     lowpass_cutoff: float = 5e3
     false_alarm: float | None = None
+    pick: str = "paper"
+    first_path_ratio: float = 0.3
+    first_path_noise: float = 4.0
 
     def __post_init__(self) -> None:
         checks.real("fs", self.fs, low=0.0, high=10e6, low_open=True, unit="Hz")
@@ -102,6 +143,9 @@ class Receiver:
         if self.false_alarm is not None:
             lo, hi = FALSE_ALARM_RANGE
             checks.real("false_alarm", self.false_alarm, low=lo, high=hi, low_open=True)
+        checks.choice("pick", self.pick, PICKS)
+        checks.real("first_path_ratio", self.first_path_ratio, low=0.0, high=1.0, low_open=True)
+        checks.real("first_path_noise", self.first_path_noise, low=0.0, high=1e3)
         # sosfiltfilt pads the window by 3 (2S + 1 − odd) samples, S = ⌈order/2⌉ sections
         pad = 3 * (2 * math.ceil(order / 2) + 1 - order % 2)
         if self.window <= pad:
@@ -176,12 +220,15 @@ def snap_to_peak(curve: np.ndarray, index: np.ndarray, width: int = 32) -> np.nd
     return np.where(dist[r, j] <= width, idx[r, j], k)
 
 
-def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | None = None) -> dict:
+def reference_chain(
+    window, chirp: Chirp | None = None, receiver: Receiver | None = None, sigma=None
+) -> dict:
     """The receiver DSP written literally for one window (N,); the definition of the chain.
 
     Returns a dict with the high-passed window ``x_hp``, the raw curve ``corr`` = |c| (Nc,),
-    the low-passed curve ``lowpassed``, the low-pass argmax ``k_lowpass`` and the snapped
-    index ``k``. Slow; used to check :class:`Dsp`.
+    the low-passed curve ``lowpassed``, the low-pass pick ``k_lowpass`` (the argmax, or the
+    first path: module docstring, step 4, with the window's noise σ ``sigma`` for its
+    noise test) and the snapped index ``k``. Slow; used to check :class:`Dsp`.
     """
     import scipy.signal
 
@@ -194,6 +241,19 @@ def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | Non
     corr = np.abs(scipy.signal.correlate(ref, x_hp, mode="full"))
     lp = scipy.signal.convolve(corr, rx.lowpass_kernel(), mode="same")
     k_lp = int(np.argmax(lp))
+    if rx.pick == "first-path":
+        tau_top = (rx.wake_sample - (k_lp + 1.0 - rx.window)) / rx.fs
+        ok = lp >= first_path_floor(chirp, rx, tau_top) * lp[k_lp]
+        end = int(np.flatnonzero(ok)[-1])  # the lobe with the largest lags: the earliest path
+        start = end
+        while start > 0 and ok[start - 1]:
+            start -= 1
+        top = start + int(np.argmax(lp[start : end + 1]))
+        if sigma is not None and rx.first_path_noise > 0:
+            gain = _literal_noise_gain(chirp, rx)[top]  # ‖g_top‖
+            if lp[top] < rx.first_path_noise * sigma * np.sqrt(2 / np.pi) * gain:
+                top = k_lp  # a lobe of noise: the strongest peak
+        k_lp = top
     k = k_lp
     for d in range(len(corr)):  # nearest local maximum, lower index first on ties
         hit = [
@@ -205,6 +265,60 @@ def reference_chain(window, chirp: Chirp | None = None, receiver: Receiver | Non
             k = hit[0]
             break
     return {"x_hp": x_hp, "corr": corr, "lowpassed": lp, "k_lowpass": k_lp, "k": k}
+
+
+#: how far above the chain's own sidelobe level an earlier lobe must reach to be a path
+SIDELOBE_MARGIN = 2.0
+
+
+def first_path_floor(chirp: Chirp, receiver: Receiver, tau) -> np.ndarray:
+    """ρ' = max(ρ, :data:`SIDELOBE_MARGIN` · :func:`sidelobe_profile` at τ) (shape of
+    ``tau``): the share of the strongest peak a lobe must reach to be taken for the first
+    path, when the strongest arrival has the delay τ (s)."""
+    taus, level = sidelobe_profile(chirp, receiver)
+    side = np.interp(np.asarray(tau, dtype=float), taus, level)
+    return np.maximum(receiver.first_path_ratio, SIDELOBE_MARGIN * side)
+
+
+@functools.lru_cache(maxsize=8)
+def sidelobe_profile(chirp: Chirp, receiver: Receiver) -> tuple[np.ndarray, np.ndarray]:
+    """(delays (33,) s, levels (33,)): for one noise-free path of each delay from the near
+    limit to the reach, the highest lobe of the low-passed curve besides the main one, as a
+    share of the main one: what the strongest arrival alone puts on the curve around it. A
+    path that overlaps the window by a 1 ms slice of the chirp has sidelobes of about a
+    fifth of its peak (a rectangular slice's −13 dB); a path the window holds whole has
+    lower ones."""
+    from simulation.received import synthesize  # a runtime import: received imports this
+    from simulation.signal import Signal
+
+    rx = dataclasses.replace(receiver, pick="paper", false_alarm=None)
+    lo, hi = Signal(chirp, rx).delays
+    taus = np.linspace(lo, hi, 33)
+    windows = synthesize(taus[:, None], np.ones((len(taus), 1)), chirp, rx)
+    levels = np.zeros(len(taus))
+    for i, window in enumerate(windows):
+        lp = reference_chain(window, chirp, rx)["lowpassed"]
+        top = int(np.argmax(lp))
+        low = lp < 0.05 * lp[top]  # the main lobe: the run around the top above 5 %
+        left, right = np.flatnonzero(low[:top]), np.flatnonzero(low[top:])
+        a = left[-1] + 1 if left.size else 0
+        b = top + right[0] if right.size else len(lp)
+        others = np.r_[lp[:a], lp[b:]]
+        levels[i] = others.max() / lp[top] if others.size else 0.0
+    return taus, levels
+
+
+@functools.lru_cache(maxsize=2)
+def _literal_noise_gain(chirp: Chirp, rx: Receiver) -> np.ndarray:
+    """(Nc,) ‖g_k‖ from the linear map of steps 1–2 written literally: row n of G is the
+    chain's correlation of the n-th unit window, one window at a time."""
+    import scipy.signal
+
+    ref, sos = chirp.samples(rx.fs), rx.highpass_sos()
+    g2 = np.zeros(len(ref) + rx.window - 1)
+    for e in np.eye(rx.window):
+        g2 += scipy.signal.correlate(ref, scipy.signal.sosfiltfilt(sos, e)) ** 2
+    return np.sqrt(g2)
 
 
 PRECISIONS = ("float64", "float32")
@@ -228,12 +342,13 @@ class Dsp:
     :func:`reference_chain`. ``"float32"`` (the simulator's default,
     :data:`DEFAULT_PRECISION`) runs the correlation and low-pass in single precision;
     rounding then moves the low-pass argmax of a few windows in 10⁴ onto a neighbouring
-    raw peak (docs/model.md, "The receiver chain").
+    raw peak (docs/model.md, "The receiver chain"). ``form`` is ``"matrix"`` or ``"fft"``
+    (module docstring; default: by the window's length, :data:`FFT_MIN_WINDOW`).
     """
 
-    def __init__(self, chirp: Chirp, receiver: Receiver, precision: str = "float64"):
-        import scipy.signal
-
+    def __init__(
+        self, chirp: Chirp, receiver: Receiver, precision: str = "float64", form: str | None = None
+    ):
         if precision not in PRECISIONS:
             raise ValueError(f"precision: must be one of {PRECISIONS}, got {precision!r}")
         self.chirp = chirp
@@ -241,30 +356,14 @@ class Dsp:
         self.precision = precision
         self.dtype = np.dtype(precision)
         N = receiver.window
-        n_ref = int(round(chirp.duration * receiver.fs))
-        checks.check_size(
-            "chirp duration x fs x window",
-            (n_ref + N) * N * 8 * 4,
-            value=(chirp.duration, receiver.fs, N),
-            hint="use a shorter chirp, a lower fs or a shorter window",
-        )
         ref = chirp.samples(receiver.fs)
         if len(ref) < 2:
             raise ValueError("chirp: shorter than two samples at the receiver's fs")
         self.n_corr = len(ref) + N - 1
-        # Steps 1-2 as one matrix: c = T · reverse(H · x) = (T · H[::-1]) x, with H the
-        # sosfiltfilt map (applied to the identity) and T the (Nc, N) convolution matrix
-        # of ref, T[k, m] = ref[k − m].
-        try:
-            H = scipy.signal.sosfiltfilt(receiver.highpass_sos(), np.eye(N), axis=0)
-        except np.linalg.LinAlgError:  # poles at z = 1 to rounding: no initial conditions
-            raise ValueError(
-                f"highpass_cutoff: {receiver.highpass_cutoff:g} Hz is too close to 0 for a "
-                f"high-pass of order {receiver.highpass_order} at fs = {receiver.fs:g} Hz"
-            ) from None
-        kk = np.arange(self.n_corr)[:, None] - np.arange(N)[None, :]
-        T = np.where((kk >= 0) & (kk < len(ref)), ref[np.clip(kk, 0, len(ref) - 1)], 0.0)
-        self.G_T = np.ascontiguousarray((T @ H[::-1]).T)  # (N, Nc): windows @ G_T
+        kernel = _highpass_kernel(receiver)
+        self.form = dsp_form(receiver) if form is None else checks.choice("form", form, FORMS)
+        if self.form == "fft" and kernel is not None and self.dtype == np.float32:
+            kernel = _highpass_kernel(receiver, SINGLE_TAIL)  # decayed below float32's ulp
         # Step 3: |H|² in the frequency domain, kernel centred at lag 0. Outputs 0..Nc−1
         # see no wrap-around when nfft ≥ Nc + taps − 1.
         kern = receiver.lowpass_kernel()
@@ -274,12 +373,18 @@ class Dsp:
         hc[: half + 1] = kern[half:]
         hc[self.nfft - half :] = kern[:half]
         self.lowpass_response = scipy.fft.rfft(hc).real  # |H(f)|², real: kernel symmetric
-        self._G = self.G_T.astype(self.dtype)
         self._H = self.lowpass_response.astype(self.dtype)
+        if self.form == "matrix":
+            self._build_matrix(ref)
+        else:
+            if kernel is None or N < 3 * (len(kernel) // 2):
+                raise ValueError(
+                    f"form: 'fft' needs a window of at least 3 high-pass decay lengths, got "
+                    f"{N} samples"
+                )
+            self._build_fft(ref, kernel)
         # raw peaks of |c| are half a carrier period apart: search a few periods around
         self.snap_width = max(32, math.ceil(receiver.fs / min(chirp.f0, chirp.f1)) + 2)
-        #: (Nc,) ‖g_k‖: the standard deviation of c[k] for white noise of unit σ
-        self.noise_gain = np.sqrt(np.einsum("nk,nk->k", self.G_T, self.G_T))
         #: η: the detection threshold in noise standard deviations (module docstring); 0
         #: without one (the paper's receiver)
         self.threshold = (
@@ -287,10 +392,119 @@ class Dsp:
             if receiver.false_alarm is None
             else detection_threshold(receiver.false_alarm, self.n_corr)
         )
+        self._noise_gain = None
+
+    def _build_matrix(self, ref: np.ndarray) -> None:
+        """Steps 1–2 as one matrix: c = T · reverse(H · x) = (T · H[::-1]) x, with H the
+        sosfiltfilt map (applied to the identity) and T the (Nc, N) convolution matrix of
+        ref, T[k, m] = ref[k − m]."""
+        import scipy.signal
+
+        rx, N = self.receiver, self.receiver.window
+        checks.check_size(
+            "chirp duration x fs x window",
+            (len(ref) + N) * N * 8 * 4,
+            value=(self.chirp.duration, rx.fs, N),
+            hint="use a shorter chirp, a lower fs or a shorter window",
+        )
+        try:
+            H = scipy.signal.sosfiltfilt(rx.highpass_sos(), np.eye(N), axis=0)
+        except np.linalg.LinAlgError:  # poles at z = 1 to rounding: no initial conditions
+            raise ValueError(
+                f"highpass_cutoff: {rx.highpass_cutoff:g} Hz is too close to 0 for a "
+                f"high-pass of order {rx.highpass_order} at fs = {rx.fs:g} Hz"
+            ) from None
+        kk = np.arange(self.n_corr)[:, None] - np.arange(N)[None, :]
+        T = np.where((kk >= 0) & (kk < len(ref)), ref[np.clip(kk, 0, len(ref) - 1)], 0.0)
+        self.G_T = np.ascontiguousarray((T @ H[::-1]).T)  # (N, Nc): windows @ G_T
+        self._G = self.G_T.astype(self.dtype)
+
+    def _build_fft(self, ref: np.ndarray, kernel: np.ndarray) -> None:
+        """Steps 1–2 with FFTs (module docstring): the high-pass as the convolution with its
+        two-sided impulse response ``kernel`` (2L + 1,) plus the exact end corrections, then
+        the correlation as a product with the reference's spectrum."""
+        import scipy.signal
+
+        rx, N = self.receiver, self.receiver.window
+        L = len(kernel) // 2
+        self.edge = L
+        self.n_hp = scipy.fft.next_fast_len(N + L, real=True)
+        kc = np.zeros(self.n_hp)  # the kernel centred at lag 0 (circular)
+        kc[: L + 1] = kernel[L:]
+        kc[self.n_hp - L :] = kernel[:L]
+        cdt = np.result_type(self.dtype, np.complex64)
+        self._K_hat = scipy.fft.rfft(kc).astype(cdt)
+        # the end corrections: the exact map on the first and last L inputs minus the kernel
+        cols = np.r_[0:L, N - L : N]
+        unit = np.zeros((N, 2 * L))
+        unit[cols, np.arange(2 * L)] = 1.0
+        exact = scipy.signal.sosfiltfilt(rx.highpass_sos(), unit, axis=0)  # (N, 2L)
+        lag = np.arange(N)[:, None] - cols[None, :]
+        conv = np.where(np.abs(lag) <= L, kernel[np.clip(lag + L, 0, 2 * L)], 0.0)
+        E = exact - conv
+        self._E_top_T = np.ascontiguousarray(E[:L, :L].T).astype(self.dtype)
+        self._E_bot_T = np.ascontiguousarray(E[N - L :, L:].T).astype(self.dtype)
+        # c = correlate(ref, y, "full") = convolve(ref, y reversed), lags 0 … Nc − 1; the
+        # reversal's phase e^{−2πif(N − 1)/nfft} is folded into the reference's spectrum
+        self.n_xc = scipy.fft.next_fast_len(self.n_corr, real=True)  # no wrap-around
+        f = np.arange(self.n_xc // 2 + 1)
+        shift = np.exp(-2j * np.pi * ((f * (N - 1)) % self.n_xc) / self.n_xc)  # exact turns
+        self._R_hat = (scipy.fft.rfft(ref, n=self.n_xc) * shift).astype(cdt)
+
+    def _fft_correlate(self, x: np.ndarray, out: np.ndarray) -> None:
+        """Steps 1–2 with FFTs for windows x (B, N) into ``out`` (B, nfft): c at lags
+        0 … Nc − 1, zeros after."""
+        N, L = self.receiver.window, self.edge
+        spec = scipy.fft.rfft(x, n=self.n_hp, axis=-1, workers=1)
+        spec *= self._K_hat
+        y = scipy.fft.irfft(spec, n=self.n_hp, axis=-1, workers=1)[:, :N]
+        y[:, :L] += x[:, :L] @ self._E_top_T
+        y[:, N - L :] += x[:, N - L :] @ self._E_bot_T
+        # the spectrum of y reversed, y[N − 1 − n], is conj(Ŷ) times e^{−2πif(N − 1)/nfft}
+        spec = scipy.fft.rfft(y, n=self.n_xc, axis=-1, workers=1)
+        np.conjugate(spec, out=spec)
+        spec *= self._R_hat
+        out[:, : self.n_corr] = scipy.fft.irfft(spec, n=self.n_xc, axis=-1, workers=1)[
+            :, : self.n_corr
+        ]
+        out[:, self.n_corr :] = 0.0
+
+    @property
+    def noise_gain(self) -> np.ndarray:
+        """(Nc,) ‖g_k‖: the standard deviation of c[k] for white noise of unit σ."""
+        if self._noise_gain is None:
+            if self.form == "matrix":
+                g2 = np.einsum("nk,nk->k", self.G_T, self.G_T)
+            else:  # the rows of G, the chain on the unit windows, a block at a time
+                N, g2 = self.receiver.window, np.zeros(self.n_corr)
+                buf = np.empty((256, self.nfft))
+                for s in range(0, N, 256):
+                    unit = np.zeros((min(256, N - s), N))
+                    unit[np.arange(len(unit)), s + np.arange(len(unit))] = 1.0
+                    rows = buf[: len(unit)]
+                    self._fft_correlate_f64(unit, rows)
+                    g2 += np.einsum("bk,bk->k", rows[:, : self.n_corr], rows[:, : self.n_corr])
+            self._noise_gain = np.sqrt(g2)
+        return self._noise_gain
+
+    def _fft_correlate_f64(self, x: np.ndarray, out: np.ndarray) -> None:
+        """:meth:`_fft_correlate` in double precision, whatever this DSP's precision."""
+        saved = self._K_hat, self._R_hat, self._E_top_T, self._E_bot_T
+        try:
+            self._K_hat, self._R_hat = (a.astype(np.complex128) for a in saved[:2])
+            self._E_top_T, self._E_bot_T = (a.astype(float) for a in saved[2:])
+            self._fft_correlate(x, out)
+        finally:
+            self._K_hat, self._R_hat, self._E_top_T, self._E_bot_T = saved
 
     def correlation(self, windows: np.ndarray) -> np.ndarray:
         """(B, Nc) raw curve |c| of windows (B, N)."""
-        return np.abs(np.asarray(windows, dtype=float) @ self.G_T)
+        w = np.asarray(windows, dtype=float)
+        if self.form == "matrix":
+            return np.abs(w @ self.G_T)
+        out = np.empty((len(w), self.nfft))
+        self._fft_correlate_f64(w, out)
+        return np.abs(out[:, : self.n_corr])
 
     def lowpass(self, curve: np.ndarray) -> np.ndarray:
         """(B, Nc) zero-phase low-pass of curves (B, Nc)."""
@@ -298,41 +512,75 @@ class Dsp:
         spec *= self.lowpass_response
         return scipy.fft.irfft(spec, n=self.nfft, axis=-1)[:, : self.n_corr]
 
-    def _block_picks(self, buf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _block_picks(self, buf: np.ndarray, sigma=None) -> tuple[np.ndarray, np.ndarray]:
         """Snapped indices (B,) and the raw peaks |c[k]| there (B,) of rows (B, nfft)
-        holding c at lags 0 … Nc − 1, zeros after (c is replaced by |c| in place)."""
+        holding c at lags 0 … Nc − 1, zeros after (c is replaced by |c| in place);
+        ``sigma`` (B,) the windows' noise σ for the first-path pick's noise test."""
         curve = buf[:, : self.n_corr]
         np.abs(curve, out=curve)
         spec = scipy.fft.rfft(buf, axis=-1, workers=1)
         spec *= self._H
         lp = scipy.fft.irfft(spec, n=self.nfft, axis=-1, workers=1)
         lp[:, self.n_corr :] = -np.inf  # outside the correlation; argmax on whole rows is faster
-        k = snap_to_peak(curve, np.argmax(lp, axis=-1), self.snap_width)
+        k = np.argmax(lp, axis=-1)
+        if self.receiver.pick == "first-path":
+            k = self._first_path(lp[:, : self.n_corr], k, sigma)
+        k = snap_to_peak(curve, k, self.snap_width)
         return k, curve[np.arange(len(k)), k].astype(float)
+
+    def _first_path(self, lp: np.ndarray, k_max: np.ndarray, sigma) -> np.ndarray:
+        """(B,) the first-path pick on low-passed curves lp (B, Nc) (module docstring, step
+        4): the argmax within the qualifying run of lags with the largest lags, else
+        ``k_max``."""
+        rx = self.receiver
+        rows = np.arange(len(lp))
+        tau_top = (rx.wake_sample - (k_max + 1.0 - rx.window)) / rx.fs
+        ok = lp >= (first_path_floor(self.chirp, rx, tau_top) * lp[rows, k_max])[:, None]
+        n = lp.shape[1]
+        end = n - 1 - np.argmax(ok[:, ::-1], axis=1)  # the run's latest lag: earliest path
+        lags = np.arange(n)
+        gap = ~ok & (lags[None, :] < end[:, None])  # lags below the run that do not qualify
+        start = np.where(gap.any(axis=1), n - np.argmax(gap[:, ::-1], axis=1), 0)
+        run = (lags[None, :] >= start[:, None]) & (lags[None, :] <= end[:, None])
+        k = np.argmax(np.where(run, lp, -np.inf), axis=1)
+        if sigma is not None and rx.first_path_noise > 0:  # a lobe of noise: the strongest
+            noise = rx.first_path_noise * np.asarray(sigma) * math.sqrt(2 / math.pi)
+            k = np.where(lp[rows, k] >= noise * self.noise_gain[k], k, k_max)
+        return k
 
     def indices(self, windows: np.ndarray, block: int = 128) -> np.ndarray:
         """Snapped full-correlation index k (...,) for windows (..., N) (:meth:`picks`)."""
         return self.picks(windows, block)[0]
 
-    def picks(self, windows: np.ndarray, block: int = 128) -> tuple[np.ndarray, np.ndarray]:
+    def picks(
+        self, windows: np.ndarray, block: int = 128, sigma=None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Snapped full-correlation index k (...,) and raw peak |c[k]| (...,) for windows
-        (..., N).
+        (..., N); ``sigma`` (broadcast to (...,)) the noise σ of each window, used by the
+        first-path pick's noise test (None: no noise test).
 
         Windows go through in parts of up to :data:`PART_BYTES` of correlation: a part's
-        correlation is one matrix product into a zero-padded buffer reused from part to part
-        (few large products: each wakes the BLAS threads), its FFTs run in blocks of
-        ``block`` rows on ``scipy.fft``'s worker count of threads (``with
-        scipy.fft.set_workers(n): ...``; numpy and scipy.fft release the GIL). Results
-        depend neither on ``block`` nor on the threads.
+        correlation is one matrix product (or its FFT form) into a zero-padded buffer
+        reused from part to part (few large products: each wakes the BLAS threads), its
+        FFTs run in blocks of ``block`` rows on ``scipy.fft``'s worker count of threads
+        (``with scipy.fft.set_workers(n): ...``; numpy and scipy.fft release the GIL).
+        Results depend neither on ``block`` nor on the threads.
         """
         if int(block) != block or block < 1:
             raise ValueError(f"block: must be an integer >= 1, got {block}")
-        w = np.asarray(windows, dtype=float)
+        w = np.asarray(windows)
+        if w.dtype not in (np.float32, np.float64):
+            w = w.astype(float)
         if w.shape[-1] != self.receiver.window:
             raise ValueError(f"windows: last axis must be {self.receiver.window}, got {w.shape}")
         lead = w.shape[:-1]
         flat = w.reshape(-1, w.shape[-1])
         n = flat.shape[0]
+        sig = None
+        if sigma is not None:
+            sig = np.broadcast_to(np.asarray(sigma, dtype=float), lead).reshape(-1)
+            if self.receiver.pick == "first-path":
+                self.noise_gain  # noqa: B018 - computed once here, not in every thread
         step = block * max(1, PART_BYTES // (self.nfft * self.dtype.itemsize * block))
         out = np.empty(n, dtype=np.int64)
         peak = np.empty(n)
@@ -345,22 +593,35 @@ class Dsp:
             pool = ThreadPoolExecutor(threads)
         try:
             for s in range(0, n, step):
-                part = flat[s : s + step]
+                part = flat[s : s + step].astype(self.dtype, copy=False)
                 rows = buf[: part.shape[0]]
-                np.matmul(part.astype(self.dtype, copy=False), self._G, out=rows[:, : self.n_corr])
                 starts = range(0, part.shape[0], block)
-                blocks = (rows[b : b + block] for b in starts)
-                results = list(
-                    map(self._block_picks, blocks)
-                    if pool is None
-                    else pool.map(self._block_picks, blocks)
-                )
+                if self.form == "matrix":
+                    np.matmul(part, self._G, out=rows[:, : self.n_corr])
+                    task = self._picks_of
+                else:  # the FFT form runs its correlation in the blocks too
+                    task = self._fft_picks_of(part)
+                args = [(rows, b, block, None if sig is None else sig[s + b : s + b + block])
+                        for b in starts]  # fmt: skip
+                results = list(map(task, args) if pool is None else pool.map(task, args))
                 out[s : s + part.shape[0]] = np.concatenate([r[0] for r in results])
                 peak[s : s + part.shape[0]] = np.concatenate([r[1] for r in results])
         finally:
             if pool is not None:
                 pool.shutdown()
         return out.reshape(lead), peak.reshape(lead)
+
+    def _picks_of(self, arg) -> tuple[np.ndarray, np.ndarray]:
+        rows, b, block, sig = arg
+        return self._block_picks(rows[b : b + block], sig)
+
+    def _fft_picks_of(self, part: np.ndarray):
+        def task(arg):
+            rows, b, block, sig = arg
+            self._fft_correlate(part[b : b + block], rows[b : b + block])
+            return self._block_picks(rows[b : b + block], sig)
+
+        return task
 
     def ranges(self, windows: np.ndarray, speed_of_sound: float) -> np.ndarray:
         """Range estimates in metres (...,) for windows (..., N), without detection."""
@@ -377,23 +638,76 @@ class Dsp:
         """Ranges (...,) in metres and their status (...,) (:data:`RANGE_STATUS`) for
         windows (..., N) (step 6 of the module docstring): NaN unless the direct path's
         delay ``direct_delays`` (s, broadcast to the windows' leading shape) lies within
-        ``delays`` = (τ_min, τ_max) seconds (:attr:`simulation.signal.Signal.delays`) and
-        the picked peak exceeds η·σ·‖g_k‖ (``noise_sigma`` σ broadcast likewise; η = 0
-        without a threshold, and then any peak > 0 is heard) with, under a threshold,
-        the picked delay within ``delays`` too."""
-        k, peak = self.picks(windows)
+        ``delays`` = (τ_min, τ_max) seconds (:attr:`simulation.signal.Signal.delays`), the
+        picked delay is not negative (the paper's receiver: not below
+        :data:`RANGE_FLOOR` in range) and the picked peak exceeds η·σ·‖g_k‖
+        (``noise_sigma`` σ broadcast likewise; η = 0 without a threshold, and then any
+        peak > 0 is heard) with, under a threshold, the picked delay within ``delays``
+        too."""
+        lead = np.shape(windows)[:-1]
+        sigma = np.broadcast_to(np.asarray(noise_sigma, dtype=float), lead)
+        k, peak = self.picks(windows, sigma=sigma if self.receiver.pick != "paper" else None)
         r = self.receiver.range_from_index(k, speed_of_sound)
-        sigma = np.broadcast_to(np.asarray(noise_sigma, dtype=float), k.shape)
-        heard = peak > self.threshold * sigma * self.noise_gain[k]
+        heard = peak > self.threshold * sigma * self.noise_gain[k] if self.threshold else peak > 0
         lo, hi = delays
         direct = np.broadcast_to(np.asarray(direct_delays, dtype=float), k.shape)
+        tau = (self.receiver.wake_sample - (k + 1.0 - self.receiver.window)) / self.receiver.fs
+        rx = self.receiver
+        paper = rx.pick == "paper" and rx.false_alarm is None
         seen = (direct >= lo) & (direct <= hi)
+        seen &= tau >= (RANGE_FLOOR / speed_of_sound if paper else 0.0)
         if self.receiver.false_alarm is not None:  # a detecting receiver checks its pick too
-            tau = (self.receiver.wake_sample - (k + 1.0 - self.receiver.window)) / self.receiver.fs
             seen &= (tau >= lo) & (tau <= hi)
         status = np.where(seen, np.where(heard, HEARD, NOT_HEARD), OUT_OF_REACH)
         status = status.astype(np.int8)
         return np.where(status == HEARD, r, np.nan), status
+
+
+FORMS = ("matrix", "fft")
+
+
+def dsp_form(receiver: Receiver) -> str:
+    """The :class:`Dsp` form for a receiver: ``"fft"`` for windows of
+    :data:`FFT_MIN_WINDOW` samples and more that span three decay lengths of the
+    high-pass's response, else ``"matrix"``."""
+    kernel = _highpass_kernel(receiver)
+    fits = kernel is not None and receiver.window >= 3 * (len(kernel) // 2)
+    return "fft" if receiver.window >= FFT_MIN_WINDOW and fits else "matrix"
+
+
+#: where the high-pass's response is cut: below this share of its peak (double
+#: precision's rounding) and, for a single-precision DSP, :data:`SINGLE_TAIL`
+DOUBLE_TAIL, SINGLE_TAIL = 1e-17, 1e-9
+
+
+def _highpass_kernel(receiver: Receiver, tail: float = DOUBLE_TAIL) -> np.ndarray | None:
+    """(2L + 1,) the zero-phase high-pass's two-sided impulse response (centre L), cut
+    where it has decayed below ``tail`` of its peak; None when that takes more than
+    :data:`KERNEL_PROBE` samples a side (the FFT form then does not apply)."""
+    return _kernel_cached(receiver.highpass_order, receiver.highpass_cutoff, receiver.fs, tail)
+
+
+#: samples a side of the impulse used to find the high-pass's two-sided response
+KERNEL_PROBE = 4096
+
+
+@functools.lru_cache(maxsize=8)
+def _kernel_cached(order: int, cutoff: float, fs: float, tail: float) -> np.ndarray | None:
+    import scipy.signal
+
+    sos = scipy.signal.butter(order, cutoff, "highpass", fs=fs, output="sos")
+    unit = np.zeros(2 * KERNEL_PROBE + 1)
+    unit[KERNEL_PROBE] = 1.0
+    try:
+        h = scipy.signal.sosfiltfilt(sos, unit)
+    except np.linalg.LinAlgError:
+        return None
+    beyond = np.maximum.accumulate(np.abs(h[KERNEL_PROBE:])[::-1])[::-1]  # max beyond each lag
+    small = np.flatnonzero(beyond < tail * np.abs(h).max())
+    if not small.size or small[0] > KERNEL_PROBE // 2:
+        return None
+    L = int(small[0])
+    return h[KERNEL_PROBE - L : KERNEL_PROBE + L + 1]
 
 
 def detection_threshold(false_alarm: float, lags: int) -> float:
@@ -425,13 +739,16 @@ def signal_chain(chirp: Chirp | None, receiver: Receiver | None) -> tuple[Chirp,
 
 
 def dsp_for(
-    chirp: Chirp | None = None, receiver: Receiver | None = None, precision: str = "float64"
+    chirp: Chirp | None = None,
+    receiver: Receiver | None = None,
+    precision: str = "float64",
+    form: str | None = None,
 ) -> Dsp:
     """The (cached) :class:`Dsp` of a chirp and receiver (the defaults when None)."""
     chirp, receiver = signal_chain(chirp, receiver)
-    return _dsp_cached(chirp, receiver, precision)
+    return _dsp_cached(chirp, receiver, precision, form)
 
 
 @functools.lru_cache(maxsize=8)
-def _dsp_cached(chirp: Chirp, receiver: Receiver, precision: str) -> Dsp:
-    return Dsp(chirp, receiver, precision)
+def _dsp_cached(chirp: Chirp, receiver: Receiver, precision: str, form) -> Dsp:
+    return Dsp(chirp, receiver, precision, form)

@@ -161,6 +161,21 @@ class Room:
             self, "obstacles", floorplan.obstacles_from(self.obstacles, size, self.corners)
         )
         self._init_boxes(size)
+        self._check_window()
+
+    def _check_window(self) -> None:
+        """A window that closes after the chirp's end plus the longest flight in the room
+        (its diagonal over c) holds nothing but noise after that: refuse it."""
+        sig = self.signal
+        latest = sig.chirp.duration + self.diagonal / self.speed_of_sound
+        if sig.window_end > latest + 1.0 / sig.receiver.fs:
+            allowed = int((latest - sig.receiver.t_wake) * sig.receiver.fs) + 1
+            raise ValueError(
+                f"window: {sig.receiver.window} samples from t_wake = "
+                f"{sig.receiver.t_wake * 1e3:g} ms close {sig.window_end * 1e3:g} ms after the "
+                f"chirp starts, after its end plus the room's longest flight "
+                f"({latest * 1e3:.4g} ms); allowed: at most {max(allowed, 0)} samples"
+            )
 
     def _init_geometry(self) -> tuple[float, float, float]:
         """Check the size, or normalize the floor plan and derive the size from it."""
@@ -317,6 +332,16 @@ class Room:
         size = (float(np.nanmax(c[:, 0])), float(np.nanmax(c[:, 1])), h)
         kw.setdefault("name", "room")
         return cls(size=size, corners=c.tolist(), **kw)
+
+    @classmethod
+    def from_dxf(cls, path, height: float, **kw) -> Room:
+        """The room of a DXF floor plan (:mod:`simulation.dxf`): the closed polyline on
+        ``layer`` (default "room") in ``unit`` ("mm", "cm" or "m"), ``height`` m high, with
+        the rectangles on ``obstacle_layer`` (default "obstacles") as obstacles
+        ``obstacle_height`` m high; every other keyword is a :class:`Room` field."""
+        from simulation.dxf import room_from_dxf
+
+        return room_from_dxf(path, height, **kw)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Room:

@@ -7,19 +7,23 @@ plan, the validation and the bounds' SNR model.
 
 **Reach** (docs/model.md, "Reach of a signal design"). The receiver samples the window
 t_n = t_wake + n/fs, n = 0 … N − 1, whose span is W = (N − 1)/fs. A path with delay τ puts
-chirp time u = t_n − τ at sample n, and the chirp is on for 0 ≤ u ≤ T. The window holds the
-whole of what it can hold of that path when
+chirp time u = t_n − τ at sample n, and the chirp is on for 0 ≤ u ≤ T; the window holds the
+part of the chirp with u ∈ [t_wake − τ, t_wake + W − τ] ∩ [0, T]. The receiver sees a path
+when the window holds at least D = min(W, T, :data:`MIN_OVERLAP`) of its chirp: all of
+what a window shorter than 1 ms can hold, else at least the 1 ms slice of the paper's
+design. The overlap is at least D for
 
-- W ≤ T (a slice of the chirp): the chirp covers the window, 0 ≤ t_wake − τ and
-  t_wake + W − τ ≤ T, i.e. τ ∈ [t_wake + W − T, t_wake];
-- W ≥ T (the whole chirp): the window covers the chirp, τ ∈ [t_wake, t_wake + W − T].
+    τ ∈ [τ_min, τ_max],  τ_min = max(0, t_wake + min(0, D − T)),  τ_max = t_wake + max(0, W − D),
 
-So the delays the window sees are [τ_min, τ_max] with τ_max = t_wake + max(0, W − T) and
-τ_min = max(0, t_wake + min(0, W − T)); at the speed of sound c the **reach** is c·τ_max
-and the **near limit** c·τ_min. A path outside them overlaps the window partly or not at
-all: its correlation peak is weak or absent, and the receiver reports "no range" for a
-time of flight outside them (:mod:`simulation.receiver`). The paper's design (T = 30 ms,
-t_wake = 29 ms, N = 192 at 192 kHz) reaches c·29 ms = 9.95 m at 20 °C and has no near limit.
+and at the speed of sound c the **reach** is c·τ_max and the **near limit** c·τ_min. A
+path outside them overlaps the window less or not at all: its correlation peak is weak or
+absent, and the receiver reports "no range" for a time of flight outside them
+(:mod:`simulation.receiver`). The paper's design (T = 30 ms, t_wake = 29 ms, N = 192 at
+192 kHz, so D = W) reaches c·29 ms = 9.95 m at 20 °C and has no near limit; a 20 ms
+window from t_wake = 10 ms reaches c·(10 + 20 − 1) ms = 9.95 m too.
+
+A window may be longer than the chirp (it then holds whole chirps); a room refuses one
+that closes after the chirp's end plus its longest flight (nothing arrives so late).
 """
 
 from __future__ import annotations
@@ -31,7 +35,11 @@ from typing import Any
 
 from simulation import checks
 from simulation.chirp import Chirp
-from simulation.receiver import Receiver, signal_chain
+from simulation.receiver import Receiver, dsp_form, signal_chain
+
+#: the shortest overlap (s) of a path's chirp with a window longer than it that the
+#: receiver is taken to see: the paper's 1 ms slice (module docstring)
+MIN_OVERLAP = 1e-3
 
 _CHIRP_KEYS = tuple(f.name for f in dataclasses.fields(Chirp))
 _RECEIVER_KEYS = tuple(f.name for f in dataclasses.fields(Receiver))
@@ -59,21 +67,16 @@ class Signal:
                 f"chirp: the band must rise, f0 < f1 (an up-chirp), got f0 = {chirp.f0:g} Hz, "
                 f"f1 = {chirp.f1:g} Hz"
             )
-        if self.window_span > chirp.duration:
-            raise ValueError(
-                f"window: {rx.window} samples at {rx.fs:g} Hz span {self.window_span * 1e3:g} ms, "
-                f"longer than the chirp ({chirp.duration * 1e3:g} ms); allowed: at most "
-                f"{int(chirp.duration * rx.fs) + 1} samples"
-            )
         _check_highpass(rx)
-        # the receiver's DSP holds an (N, Nref + N − 1) matrix: refuse before any work
-        n_ref = round(chirp.duration * rx.fs)
-        checks.check_size(
-            "chirp duration x fs x window",
-            (n_ref + rx.window) * rx.window * 8 * 4,
-            value=(chirp.duration, rx.fs, rx.window),
-            hint="use a shorter chirp, a lower fs or a shorter window",
-        )
+        # a short window's DSP holds an (N, Nref + N − 1) matrix: refuse before any work
+        if dsp_form(rx) == "matrix":
+            n_ref = round(chirp.duration * rx.fs)
+            checks.check_size(
+                "chirp duration x fs x window",
+                (n_ref + rx.window) * rx.window * 8 * 4,
+                value=(chirp.duration, rx.fs, rx.window),
+                hint="use a shorter chirp, a lower fs or a shorter window",
+            )
 
     # -- reach ------------------------------------------------------------------------------
     @property
@@ -82,11 +85,32 @@ class Signal:
         return (self.receiver.window - 1) / self.receiver.fs
 
     @property
+    def min_overlap(self) -> float:
+        """D = min(W, T, :data:`MIN_OVERLAP`) seconds: the least of a path's chirp the
+        window must hold for the receiver to see it (module docstring)."""
+        return min(self.window_span, self.chirp.duration, MIN_OVERLAP)
+
+    @property
     def delays(self) -> tuple[float, float]:
-        """(τ_min, τ_max) in seconds: the times of flight whose chirp the window holds as
-        fully as it can (module docstring)."""
-        t, extra = self.receiver.t_wake, self.window_span - self.chirp.duration
-        return max(0.0, t + min(0.0, extra)), t + max(0.0, extra)
+        """(τ_min, τ_max) in seconds: the times of flight whose chirp the window holds at
+        least :attr:`min_overlap` of (module docstring)."""
+        t, D = self.receiver.t_wake, self.min_overlap
+        return max(0.0, t + min(0.0, D - self.chirp.duration)), t + max(0.0, self.window_span - D)
+
+    @property
+    def window_end(self) -> float:
+        """t_wake + W: when the window closes, seconds after the chirp starts."""
+        return self.receiver.t_wake + self.window_span
+
+    def describe(self) -> str:
+        """One line naming the design: chirp band and length, window start, length, pick."""
+        ch, rx = self.chirp, self.receiver
+        return (
+            f"chirp {ch.f0 / 1e3:g}–{ch.f1 / 1e3:g} kHz over {ch.duration * 1e3:g} ms; window "
+            f"{self.window_span * 1e3:.3g} ms ({rx.window} samples at {rx.fs / 1e3:g} kHz) from "
+            f"{rx.t_wake * 1e3:g} ms; {rx.pick} pick"
+            + ("" if rx.false_alarm is None else f"; detection at P_fa {rx.false_alarm:g}")
+        )
 
     def reach(self, speed_of_sound: float) -> float:
         """The longest range (m) the window sees at ``speed_of_sound`` (m/s): c·τ_max."""
@@ -123,6 +147,20 @@ class Signal:
         chirp = Chirp(**{k: d[k] for k in _CHIRP_KEYS if k in d})
         receiver = Receiver(**{k: d[k] for k in _RECEIVER_KEYS if k in d})
         return cls(chirp, receiver)
+
+
+def closing_window(signal: Signal, window: float, pick: str | None = None) -> Signal:
+    """``signal`` with a window of ``window`` seconds (N = round(window·fs) samples) that
+    closes with the chirp (t_wake = T − N/fs, to the picosecond), and ``pick`` when given:
+    the family of receiver designs the receiver study compares (the paper's is 1 ms)."""
+    rx = signal.receiver
+    w = checks.real("window", window, low=0.0, high=signal.chirp.duration, low_open=True, unit="s")
+    n = int(round(w * rx.fs))
+    t_wake = round(signal.chirp.duration - n / rx.fs, 12)
+    changes = {"window": n, "t_wake": max(t_wake, 0.0)}
+    if pick is not None:
+        changes["pick"] = pick
+    return dataclasses.replace(signal, receiver=dataclasses.replace(rx, **changes))
 
 
 def _check_highpass(rx: Receiver) -> None:

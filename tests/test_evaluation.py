@@ -207,11 +207,11 @@ def test_other_room_chirp_receiver_and_snr():
     ev = evaluate_layout(room, a, realizations=2, rng=0, nodes=nodes, snr_db=20.0)
     d = np.linalg.norm(nodes[:, None] - a[None], axis=-1)
     # the 1.33 ms window opens at 19 ms, 0.33 ms before the 20 ms chirp would leave it:
-    # it sees ranges from c·0.33 ms = 11 cm to c·19 ms = 6.5 m (the room's diagonal is
-    # 8.4 m); a node fixes when 4 anchors are within them
+    # it holds 1 ms of a path's chirp from ranges 0 to c·(19 + 1.33 − 1) ms = 6.6 m (the
+    # room's diagonal is 8.4 m); a node fixes when 4 anchors are within them
     in_reach = (d >= room.near_limit) & (d <= room.reach)
-    assert room.reach == pytest.approx(room.speed_of_sound * 19e-3)
-    assert room.near_limit == pytest.approx(room.speed_of_sound * (19e-3 + 255 / 192e3 - 20e-3))
+    assert room.reach == pytest.approx(room.speed_of_sound * (19e-3 + 255 / 192e3 - 1e-3))
+    assert room.near_limit == 0.0
     assert 0 < in_reach.mean() < 1
     assert ev.errors.shape == (2, 36) and ev.range_errors.shape == (2, 36, 4)
     np.testing.assert_array_equal(np.isfinite(ev.ranges), np.broadcast_to(in_reach, (2, 36, 4)))

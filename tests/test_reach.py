@@ -23,39 +23,50 @@ TECHTILE = Room.techtile()
 LONG = Signal(Chirp(duration=0.09), Receiver(t_wake=0.089))
 
 
-def _window_coverage(signal: Signal, tau: np.ndarray) -> np.ndarray:
-    """The share of window samples where a unit path of delay τ carries its chirp,
-    measured on the synthesized window of a chirp with a constant envelope: the samples
-    where |s| is not identically zero, counted through the chirp's support."""
+def _overlap(signal: Signal, tau: np.ndarray) -> np.ndarray:
+    """Seconds of a path's chirp the window holds, counted on the window's samples: the
+    samples where the chirp of delay τ is on, over fs."""
     rx, ch = signal.receiver, signal.chirp
     t = rx.t_wake + np.arange(rx.window) / rx.fs
     u = t[None, :] - tau[:, None]
-    return np.mean((u >= 0) & (u <= ch.duration), axis=1)
+    return np.sum((u >= 0) & (u <= ch.duration), axis=1) / rx.fs
 
 
-@pytest.mark.parametrize("signal", [Signal(), LONG, Signal(receiver=Receiver(t_wake=0.02))])
-def test_the_reach_is_where_the_window_stops_holding_the_whole_chirp(signal):
-    """Derivation (simulation.signal): full overlap for τ in [τ_min, τ_max]; the
-    synthesized window of one path holds as much energy as a fully covered one exactly
-    there, and less just outside."""
+WIDE = Signal(receiver=Receiver(t_wake=0.01, window=3840))  # 20 ms of a 30 ms chirp
+WHOLE = Signal(receiver=Receiver(t_wake=0.002, window=7680))  # 40 ms: holds whole chirps
+
+
+@pytest.mark.parametrize(
+    "signal", [Signal(), LONG, Signal(receiver=Receiver(t_wake=0.02)), WIDE, WHOLE]
+)
+def test_the_reach_is_where_the_window_stops_holding_enough_chirp(signal):
+    """Derivation (simulation.signal): an overlap of at least D = min(W, T, 1 ms) for τ in
+    [τ_min, τ_max] and less just outside; the synthesized window of one path carries
+    energy in proportion."""
     lo, hi = signal.delays
-    W = signal.window_span
-    assert hi == pytest.approx(signal.receiver.t_wake + max(0.0, W - signal.chirp.duration))
+    W, T, D = signal.window_span, signal.chirp.duration, signal.min_overlap
+    assert D == pytest.approx(min(W, T, 1e-3))
+    assert hi == pytest.approx(signal.receiver.t_wake + max(0.0, W - D))
     step = 1 / signal.receiver.fs
     inside = np.linspace(max(lo, 0.0), hi, 7)
     outside = np.array([hi + 20 * step, hi + W / 2] + ([lo - 20 * step] if lo > 20 * step else []))
-    assert np.all(_window_coverage(signal, inside) == 1.0)
-    assert np.all(_window_coverage(signal, outside) < 1.0)
-    # the synthesizer agrees: window energy of a unit path, inside against outside
+    assert np.all(_overlap(signal, inside) >= D - 1.5 * step)
+    assert np.all(_overlap(signal, outside) < D - 10 * step)
+    # the synthesizer agrees: the window energy of a unit path is its overlap's (½ per s)
     taus = np.concatenate([inside, outside])[:, None]
     w = synthesize(taus, np.ones_like(taus), signal.chirp, signal.receiver)
-    energy = np.sum(w * w, axis=1)
-    full = energy[: len(inside)]
-    np.testing.assert_allclose(full, full.mean(), rtol=0.05)
-    assert np.all(energy[len(inside) :] < 0.95 * full.mean())
+    energy = np.sum(w * w, axis=1) / signal.receiver.fs
+    np.testing.assert_allclose(energy, 0.5 * _overlap(signal, taus[:, 0]), rtol=0.03, atol=2e-6)
     c = 343.0
     assert signal.reach(c) == pytest.approx(c * hi)
     assert signal.near_limit(c) == pytest.approx(c * lo)
+
+
+def test_the_papers_design_keeps_its_reach_exactly():
+    """D = W for the paper's 1 ms window: τ_max = t_wake and τ_min = 0 exactly, as
+    before the overlap rule."""
+    assert Signal().delays == (0.0, Receiver().t_wake)
+    assert WIDE.reach(343.0) == pytest.approx(343.0 * (0.01 + WIDE.window_span - 1e-3))
 
 
 def test_the_papers_design_reaches_ten_metres():
@@ -277,7 +288,10 @@ def test_signal_and_air_settings_round_trip_through_toml(tmp_path):
         (lambda: Room(air_absorption="iso"), "air_absorption"),
         (lambda: Signal(Chirp(f0=45e3, f1=25e3)), "chirp"),  # inverted band
         (lambda: Signal(Chirp(f0=25e3, f1=120e3)), "chirp"),  # above fs/2
-        (lambda: Signal(Chirp(duration=0.01), Receiver(t_wake=0.0, window=4000)), "window"),
+        (lambda: Room(signal=Signal(receiver=Receiver(t_wake=0.0, window=20000))), "window"),
+        (lambda: Receiver(pick="last"), "pick"),
+        (lambda: Receiver(first_path_ratio=0.0), "first_path_ratio"),
+        (lambda: Receiver(first_path_noise=-1.0), "first_path_noise"),
         (lambda: Chirp(duration=0.0), "duration"),
         (lambda: Chirp(duration=-0.03), "duration"),
         (lambda: Chirp(duration=5.0), "duration"),  # seconds of chirp
@@ -367,7 +381,7 @@ def test_the_cli_prints_the_signal_and_the_availability(tmp_path, capsys):
     assert main([*argv, "--chirp-duration", "0.09", "--t-wake", "0.089"]) == 0
     text = capsys.readouterr().out
     assert "reach 30.55 m" in text and "availability 100 %" in text
-    assert main([*argv, "--window", "9000"]) == 2
+    assert main([*argv, "--window", "20000"]) == 2
     assert "--window" in capsys.readouterr().err
 
 

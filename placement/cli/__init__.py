@@ -16,6 +16,7 @@ COMMANDS = (
     "evaluate",
     "report",
     "peb_map",
+    "export",
 )
 
 

@@ -36,7 +36,7 @@ def run(args) -> int:
         output_file("--out", args.out)
     lo, hi = SIGMA_RANGE
     checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
-    room = load_room(args.room)
+    room = load_room(args.room, args)
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()
     values = bound(room, anchors, nodes, args.sigma)

@@ -28,20 +28,49 @@ __all__ = [
 
 
 def add_room_argument(parser) -> None:
-    """Add ``--room`` (a room TOML file; default: the embedded techtile room)."""
+    """Add ``--room`` (a room TOML file or a DXF floor plan; default: the embedded
+    techtile room) and the options of a DXF floor plan."""
     parser.add_argument(
         "--room",
-        metavar="R.toml",
+        metavar="R.toml|R.dxf",
         default=None,
-        help="room description in TOML (default: the embedded techtile room)",
+        help="room description in TOML, or a DXF floor plan (with --room-height) (default: "
+        "the embedded techtile room)",
     )
+    g = parser.add_argument_group("a DXF floor plan (--room R.dxf)")
+    g.add_argument("--room-height", type=float, metavar="M", help="the room's height, m")
+    g.add_argument(
+        "--dxf-unit", choices=("m", "cm", "mm"), default="m", help="the drawing's unit (m)"
+    )
+    g.add_argument(
+        "--dxf-layer", default="room", help="layer of the outline's closed polyline (room)"
+    )
+    g.add_argument("--obstacle-height", type=float, metavar="M", help="height of the obstacles, m")
 
 
-def load_room(path: str | None) -> Room:
-    """The room from a TOML file, or the techtile room when ``path`` is None."""
+def load_room(path: str | None, args=None) -> Room:
+    """The room from a TOML file or a DXF floor plan (the DXF options from ``args``), or
+    the techtile room when ``path`` is None."""
     if path is None:
         return Room.techtile()
     checks.input_file("--room", path)
+    if str(path).lower().endswith(".dxf"):
+        height = getattr(args, "room_height", None)
+        if height is None:
+            raise ValueError(f"--room-height: a DXF floor plan ({path}) needs the room's height, m")
+        try:
+            return Room.from_dxf(
+                path,
+                height,
+                unit=getattr(args, "dxf_unit", "m"),
+                layer=getattr(args, "dxf_layer", "room"),
+                obstacle_height=getattr(args, "obstacle_height", None),
+            )
+        except ValueError as exc:
+            key, _, text = str(exc).partition(":")
+            flag = {"height": "--room-height", "layer": "--dxf-layer", "unit": "--dxf-unit",
+                    "obstacle_height": "--obstacle-height"}.get(key)  # fmt: skip
+            raise ValueError(f"{flag}: {text.strip()}" if flag else str(exc)) from None
     return Room.from_toml(path)
 
 
@@ -53,6 +82,7 @@ SIGNAL_FLAGS = {
     "--t-wake": "t_wake",
     "--window": "window",
     "--false-alarm": "false_alarm",
+    "--pick": "pick",
 }
 
 
@@ -78,6 +108,12 @@ def add_signal_arguments(parser) -> None:
         help="detection threshold's false-alarm bound per window, e.g. 1e-3 (default: none, "
         "the paper's receiver)",
     )
+    g.add_argument(
+        "--pick",
+        choices=("paper", "first-path"),
+        help="the receiver's peak pick: the strongest arrival (paper, the default) or the "
+        "earliest that stands out (first-path)",
+    )
 
 
 def apply_signal(args, room: Room) -> Room:
@@ -101,6 +137,7 @@ def apply_signal(args, room: Room) -> Room:
     merged = {**room.signal.to_dict(), **given}
     try:
         signal = Signal.from_dict(merged)
+        return dataclasses.replace(room, signal=signal)  # the room checks the window too
     except ValueError as exc:
         key, _, text = str(exc).partition(":")
         if key == "chirp" and "fs" in given and "f0" not in given:
@@ -111,7 +148,6 @@ def apply_signal(args, room: Room) -> Room:
             if k == key or (k is None and key in ("f0", "f1", "chirp"))
         ]
         raise ValueError(f"{flags[0] if flags else 'signal'}: {text.strip()}") from None
-    return dataclasses.replace(room, signal=signal)
 
 
 def describe_room(room: Room) -> str:
@@ -140,7 +176,7 @@ def describe_signal(room: Room) -> str:
     return (
         f"signal: chirp {ch.duration * 1e3:g} ms {ch.f0 / 1e3:g}-{ch.f1 / 1e3:g} kHz, window "
         f"{rx.window} samples ({sig.window_span * 1e3:.3g} ms) from {rx.t_wake * 1e3:g} ms at "
-        f"{rx.fs / 1e3:g} kHz, {detect}: reach {room.reach:.2f} m{near}"
+        f"{rx.fs / 1e3:g} kHz, {rx.pick} pick, {detect}: reach {room.reach:.2f} m{near}"
     )
 
 

@@ -53,7 +53,7 @@ def run(args) -> int:
     checks.count("--realizations", args.realizations, low=1)
     checks.count("--seed", args.seed, low=0)
     check_snr("--snr", args.snr)
-    room = apply_signal(args, load_room(args.room))
+    room = apply_signal(args, load_room(args.room, args))
     anchors = load_layout(args.layout, room)
     checks.check_size(
         "--realizations",

@@ -58,7 +58,7 @@ def run(args) -> int:
     if args.size is not None:
         for v in args.size:
             checks.real("--size", v, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="inches")
-    room = load_room(args.room)
+    room = load_room(args.room, args)
     planes = [("--height", 2, z) for z in args.height or ()]
     planes += [("--x-cut", 0, x) for x in args.x_cut] + [("--y-cut", 1, y) for y in args.y_cut]
     if len(planes) > MAX_PANELS:

@@ -218,7 +218,7 @@ def run(args) -> int:
     from placement.pso import default_eval_timeout
 
     out = output_dir("--out", args.out)
-    room = apply_signal(args, load_room(args.room))
+    room = apply_signal(args, load_room(args.room, args))
     search = _check_args(args, room)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import re
 import time
 
@@ -46,6 +47,20 @@ def register(sub) -> None:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--out", metavar="DIR", default="anchorplan-sweep", help="output folder")
+    p.add_argument(
+        "--windows",
+        type=float,
+        nargs="+",
+        metavar="MS",
+        help="sweep receiver designs too: windows of these lengths (ms) closing with the chirp "
+        "(1 is the paper's), each with every --picks; one sweep of M per design",
+    )
+    p.add_argument(
+        "--picks",
+        nargs="+",
+        choices=("paper", "first-path"),
+        help="the picks of the receiver designs (with --windows; default: the room's pick)",
+    )
     add_signal_arguments(p)
     p.set_defaults(func=run, scheduler=None, eval_timeout=None)
 
@@ -67,14 +82,66 @@ def parse_counts(text: str) -> list[int]:
     raise ValueError(f"--anchors: expected a range like 4-10 or a list like 4,6,8, got {text!r}")
 
 
+def designs(args, room) -> dict[str, object]:
+    """The rooms of the receiver designs of ``--windows`` × ``--picks`` by label ("20ms-
+    first-path"); {"": room} without ``--windows``."""
+    import dataclasses
+
+    from simulation.signal import closing_window
+
+    if args.windows is None:
+        if args.picks is not None:
+            raise ValueError("--picks: sweeps receiver designs with --windows; give both")
+        return {"": room}
+    picks = args.picks or [room.signal.receiver.pick]
+    out = {}
+    for ms in args.windows:
+        checks.real("--windows", ms, low=0.0, low_open=True, unit="ms")
+        for pick in picks:
+            try:
+                sig = closing_window(room.signal, ms * 1e-3, pick)
+                out[f"{ms:g}ms-{pick}"] = dataclasses.replace(room, signal=sig)
+            except ValueError as exc:
+                raise ValueError(f"--windows: {ms:g} ms: {exc}") from None
+    return out
+
+
 def run(args) -> int:
     """Run ``anchorplan sweep`` on parsed ``args``; the exit status (0: done)."""
+    out = output_dir("--out", args.out)
+    room = apply_signal(args, load_room(args.room, args))
+    rooms = designs(args, room)
+    if list(rooms) == [""]:
+        return _run_one(args, room, out)
+    summary = []
+    for label, r in rooms.items():
+        print(f"receiver design {label}", flush=True)
+        _run_one(args, r, out / label)
+        res = json.loads((out / label / "sweep.json").read_text())
+        rx = r.signal.receiver
+        summary += [
+            {"design": label, "window": rx.window, "t_wake": rx.t_wake, "pick": rx.pick,
+             "samples_per_fix": rx.window * row["M"], **{k: row[k] for k in
+             ("M", "std", "mean", "p95", "availability", "seconds")}}
+            for row in res["rows"]
+        ]  # fmt: skip
+    write_json(out / "designs.json", {"kind": "receiver designs", "rows": summary})
+    print(" design               M   sigma    mean     P95  availability  samples/fix")
+    for d in summary:
+        print(
+            f" {d['design']:18s} {d['M']:2d}  {d['std']:6.3f}  {d['mean']:6.3f}  {d['p95']:6.3f}"
+            f"  {100 * d['availability']:10.2f} %  {d['samples_per_fix']:11d}"
+        )
+    print(f"wrote {out / 'designs.json'} and one sweep folder per design")
+    return 0
+
+
+def _run_one(args, room, out) -> int:
+    """One sweep of M for one room (and its signal design) into ``out``."""
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
 
-    out = output_dir("--out", args.out)
-    room = apply_signal(args, load_room(args.room))
     counts = [checks.count("--anchors", m, low=4, high=100) for m in parse_counts(args.anchors)]
     if args.target_p95 is not None:
         checks.real("--target-p95", args.target_p95, low=0.0, low_open=True, unit="m")

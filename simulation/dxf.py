@@ -1,0 +1,205 @@
+"""Floor plans in DXF, the CAD format floor plans come in (ezdxf).
+
+**Reading** (:func:`read_floor_plan`, ``Room.from_dxf``): the room's outline is the closed
+polyline (LWPOLYLINE or POLYLINE) on a named layer (default ``room``), the obstacles the
+closed axis-aligned rectangles on another (default ``obstacles``), standing from the floor
+to a given height. Coordinates are converted from the drawing's unit (``mm``, ``cm`` or
+``m``) to metres and shifted so that the outline's lowest x and y are 0, the room's
+origin. An axis-aligned rectangular outline gives the shoebox of its size, any other
+outline a polygonal room (:meth:`Room.from_corners`).
+
+**Writing** (:func:`write_plan`): the room's outline, obstacles, keep-outs and tag zones as
+closed polylines on their own layers (``room``, ``obstacles``, ``keepouts``, ``zones``; a
+box as its footprint, labelled with its name and heights), and the anchors as inserts of
+the block ``ANCHOR`` on the layer ``anchors`` with the attributes ``ID``, ``Z`` (height
+above the floor, m) and ``SURFACE``; in metres (``$INSUNITS`` 6) or millimetres. Reading
+a written file gives the room's outline back.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from simulation import checks
+
+#: the drawing units read and written, in metres per unit
+UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
+#: DXF $INSUNITS codes of those units
+INSUNITS = {"mm": 4, "cm": 5, "m": 6}
+#: the layers written by :func:`write_plan` (and read by default)
+LAYERS = ("room", "obstacles", "keepouts", "zones", "anchors")
+
+
+def _doc(path):
+    import ezdxf
+
+    p = checks.input_file("dxf", path)
+    try:
+        return ezdxf.readfile(str(p))
+    except (OSError, ezdxf.DXFError) as exc:
+        raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
+
+
+def _polylines(doc, layer: str) -> list[tuple[np.ndarray, bool]]:
+    """The (vertices (n, 2), closed) of every polyline on ``layer`` (case-insensitive)."""
+    out = []
+    for e in doc.modelspace().query("LWPOLYLINE POLYLINE"):
+        if e.dxf.layer.lower() != layer.lower():
+            continue
+        if e.dxftype() == "LWPOLYLINE":
+            pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
+            closed = bool(e.closed)
+        else:
+            pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
+            closed = bool(e.is_closed)
+        if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
+            pts, closed = pts[:-1], True
+        out.append((pts, closed))
+    return out
+
+
+def read_floor_plan(
+    path, *, layer: str = "room", unit: str = "m", obstacle_layer: str = "obstacles"
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """(corners (n, 2), obstacle footprints [(2, 2) min/max rows]) in metres from the DXF
+    ``path`` (module docstring), shifted to the outline's origin. ValueError naming the
+    file and layer for a missing layer, no outline, an open or a second outline, or an
+    obstacle that is not an axis-aligned rectangle."""
+    checks.choice("unit", unit, list(UNITS))
+    doc = _doc(path)
+    scale = UNITS[unit]
+    outlines = _polylines(doc, layer)
+    layers = sorted({e.dxf.layer for e in doc.modelspace()})
+    if not outlines:
+        raise ValueError(
+            f"layer: no polyline on layer {layer!r} in {path} (its layers: {layers}); the "
+            "room's outline is a closed polyline on that layer"
+        )
+    if len(outlines) > 1:
+        raise ValueError(f"layer: {len(outlines)} polylines on layer {layer!r} in {path}; "
+                         "expected one closed outline")  # fmt: skip
+    corners, closed = outlines[0]
+    if not closed:
+        raise ValueError(
+            f"layer: the outline on layer {layer!r} in {path} is an open polyline; close it "
+            "(the room is the polygon it encloses)"
+        )
+    corners = corners * scale
+    origin = corners.min(axis=0)
+    footprints = []
+    for k, (pts, closed) in enumerate(_polylines(doc, obstacle_layer)):
+        pts = pts * scale - origin
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        on_edges = np.all(
+            (np.isclose(pts[:, 0], lo[0]) | np.isclose(pts[:, 0], hi[0]))
+            & (np.isclose(pts[:, 1], lo[1]) | np.isclose(pts[:, 1], hi[1]))
+        )
+        if not closed or len(pts) != 4 or not on_edges:
+            raise ValueError(
+                f"obstacle_layer: polyline {k} on layer {obstacle_layer!r} in {path} is not a "
+                "closed axis-aligned rectangle (obstacles are boxes)"
+            )
+        footprints.append(np.array([lo, hi]))
+    return corners - origin, footprints
+
+
+def room_from_dxf(
+    path,
+    height: float,
+    *,
+    layer: str = "room",
+    unit: str = "m",
+    obstacle_layer: str = "obstacles",
+    obstacle_height: float | None = None,
+    **kw,
+):
+    """The room of the DXF floor plan ``path`` (module docstring): ``height`` m high, its
+    obstacles ``obstacle_height`` m high (needed when the layer has any); every other
+    keyword is a :class:`~simulation.room.Room` field."""
+    from simulation.room import SIZE_RANGE, Room
+
+    h = checks.real("height", height, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="m")
+    corners, footprints = read_floor_plan(
+        path, layer=layer, unit=unit, obstacle_layer=obstacle_layer
+    )
+    obstacles = list(kw.pop("obstacles", None) or [])
+    if footprints:
+        if obstacle_height is None:
+            raise ValueError(
+                f"obstacle_height: layer {obstacle_layer!r} of {path} has {len(footprints)} "
+                "obstacle(s): give their height in m"
+            )
+        oh = checks.real("obstacle_height", obstacle_height, low=0.0, high=h, low_open=True)
+        for k, (lo, hi) in enumerate(footprints):
+            obstacles.append({"min": [lo[0], lo[1], 0.0], "max": [hi[0], hi[1], oh],
+                              "name": f"obstacle-{k}"})  # fmt: skip
+    kw.setdefault("name", Path(str(path)).stem)
+    size = corners.max(axis=0)
+    rectangle = len(corners) == 4 and np.all(
+        np.isclose(corners[:, 0], 0.0) | np.isclose(corners[:, 0], size[0])
+    ) & np.all(np.isclose(corners[:, 1], 0.0) | np.isclose(corners[:, 1], size[1]))
+    if rectangle:
+        return Room(size=(float(size[0]), float(size[1]), h), obstacles=obstacles, **kw)
+    return Room.from_corners(corners, h, obstacles=obstacles, **kw)
+
+
+def _box_outline(msp, box, layer: str, label: str, scale: float) -> None:
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(box[0]) / scale, np.asarray(box[1]) / scale)
+    msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
+                       dxfattribs={"layer": layer})  # fmt: skip
+    text = f"{label} z {z0 * scale:g}-{z1 * scale:g} m"
+    msp.add_text(text, height=0.08 / scale, dxfattribs={"layer": layer}).set_placement((x0, y0))
+
+
+def write_plan(path, room, anchors, *, unit: str = "m", surfaces=None) -> Path:
+    """Write the room and the anchors (M, 3) m to the DXF ``path`` (module docstring) in
+    ``unit``; ``surfaces`` (M,) names the surface of each anchor (default blank)."""
+    import ezdxf
+
+    checks.choice("unit", unit, list(UNITS))
+    a = checks.points("anchors", anchors)
+    surfaces = [""] * len(a) if surfaces is None else [str(s) for s in surfaces]
+    scale = UNITS[unit]
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = INSUNITS[unit]
+    for name, colour in zip(LAYERS, (7, 1, 3, 5, 6), strict=True):
+        doc.layers.add(name, color=colour)
+    block = doc.blocks.new("ANCHOR")
+    r = 0.05 / scale
+    block.add_circle((0, 0), r)
+    block.add_line((-r, 0), (r, 0))
+    block.add_line((0, -r), (0, r))
+    for k, tag in enumerate(("ID", "Z", "SURFACE")):
+        block.add_attdef(tag, (1.2 * r, -k * 1.5 * r), dxfattribs={"height": r})
+    msp = doc.modelspace()
+    corners = np.asarray(room.floor_corners) / scale
+    msp.add_lwpolyline([tuple(c) for c in corners], close=True, dxfattribs={"layer": "room"})
+    boxes = room.to_dict()  # keep-outs, zones and obstacles as {"min", "max", "name"}
+    for layer in ("obstacles", "keepouts", "zones"):
+        for k, box in enumerate(boxes.get(layer, [])):
+            name = box.get("name") or f"{layer[:-1]}-{k}"
+            _box_outline(msp, (box["min"], box["max"]), layer, name, scale)
+    for j, (p, s) in enumerate(zip(a, surfaces, strict=True)):
+        ref = msp.add_blockref(
+            "ANCHOR", (p[0] / scale, p[1] / scale), dxfattribs={"layer": "anchors"}
+        )
+        ref.add_auto_attribs({"ID": str(j + 1), "Z": f"{p[2]:.4f}", "SURFACE": s})
+    out = Path(str(path))
+    doc.saveas(out)
+    return out
+
+
+def read_anchors(path, unit: str = "m") -> np.ndarray:
+    """(M, 3) the anchors of a DXF written by :func:`write_plan`, in metres (x, y from the
+    inserts, z from their ``Z`` attribute), in ID order."""
+    checks.choice("unit", unit, list(UNITS))
+    doc = _doc(path)
+    rows = []
+    for ref in doc.modelspace().query('INSERT[name=="ANCHOR"]'):
+        att = {a.dxf.tag: a.dxf.text for a in ref.attribs}
+        x, y = ref.dxf.insert.x * UNITS[unit], ref.dxf.insert.y * UNITS[unit]
+        rows.append((int(att["ID"]), x, y, float(att["Z"])))
+    rows.sort()
+    return np.array([r[1:] for r in rows], dtype=float).reshape(-1, 3)

@@ -1,0 +1,114 @@
+"""DXF floor plans: reading rooms, writing plans, and the round trip."""
+
+import json
+
+import ezdxf
+import numpy as np
+import pytest
+
+from placement.cli import main
+from simulation import Room
+from simulation.dxf import read_anchors, write_plan
+from simulation.evaluation import simulate_ranges
+
+L_CORNERS = [[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]]
+
+
+def _drawing(path, polylines, unit_scale=1.0):
+    """A DXF with closed (or open) polylines [(layer, points, closed)], scaled."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    for layer, pts, closed in polylines:
+        msp.add_lwpolyline([(x * unit_scale, y * unit_scale) for x, y in pts], close=closed,
+                           dxfattribs={"layer": layer})  # fmt: skip
+    doc.saveas(path)
+    return path
+
+
+def test_a_rectangle_in_millimetres_is_the_shoebox_in_metres(tmp_path):
+    """An 8000 × 4000 mm rectangle drawn away from the origin: the techtile-sized shoebox,
+    with the same simulated ranges."""
+    rect = [(1500, 2500), (9500, 2500), (9500, 6500), (1500, 6500)]
+    path = _drawing(tmp_path / "box.dxf", [("room", rect, True)])
+    room = Room.from_dxf(path, 2.4, unit="mm")
+    box = Room(size=(8.0, 4.0, 2.4), name="box")
+    assert room.is_shoebox and room.size == box.size and room.name == "box"
+    a = box.corners_layout()
+    np.testing.assert_array_equal(
+        simulate_ranges(room, a, box.grid()[::20], noise=False),
+        simulate_ranges(box, a, box.grid()[::20], noise=False),
+    )
+
+
+def test_a_polygon_outline_and_obstacles(tmp_path):
+    """An L in centimetres with two rectangles on the obstacle layer: the polygonal room of
+    those corners with two boxes of the given height."""
+    path = _drawing(
+        tmp_path / "lab.dxf",
+        [("room", L_CORNERS, True), ("obstacles", [(1, 1), (1.5, 1), (1.5, 1.5), (1, 1.5)], True),
+         ("OBSTACLES", [(5, 1), (6, 1), (6, 2), (5, 2)], True)],
+        unit_scale=100.0,
+    )  # fmt: skip
+    room = Room.from_dxf(path, 3.0, unit="cm", obstacle_height=2.0)
+    assert not room.is_shoebox
+    assert np.allclose(room.floor_corners, L_CORNERS)
+    boxes = sorted((tuple(o.lo), tuple(o.hi)) for o in room.obstacles)
+    assert np.allclose(boxes[0], [(1, 1, 0), (1.5, 1.5, 2)])
+    assert np.allclose(boxes[1], [(5, 1, 0), (6, 2, 2)])
+
+
+@pytest.mark.parametrize(
+    ("polylines", "kw", "name"),
+    [
+        ([("walls", L_CORNERS, True)], {}, "layer"),  # no outline on the layer
+        ([("room", L_CORNERS, False)], {}, "layer"),  # an open outline
+        ([("room", L_CORNERS, True), ("room", L_CORNERS, True)], {}, "layer"),  # two
+        ([("room", L_CORNERS, True), ("obstacles", [(1, 1), (2, 1), (2, 2)], True)],
+         {"obstacle_height": 1.0}, "obstacle_layer"),  # not a rectangle
+        ([("room", L_CORNERS, True), ("obstacles", [(1, 1), (2, 1), (2, 2), (1, 2)], True)],
+         {}, "obstacle_height"),  # no height for the obstacles
+        ([("room", L_CORNERS, True)], {"unit": "inch"}, "unit"),
+    ],
+)  # fmt: skip
+def test_bad_floor_plans_are_refused_by_name(tmp_path, polylines, kw, name):
+    path = _drawing(tmp_path / "bad.dxf", polylines)
+    with pytest.raises(ValueError, match=name):
+        Room.from_dxf(path, 3.0, **kw)
+    with pytest.raises(ValueError, match="height"):
+        Room.from_dxf(_drawing(tmp_path / "ok.dxf", [("room", L_CORNERS, True)]), -1.0)
+
+
+@pytest.mark.parametrize("unit", ["m", "mm"])
+def test_a_written_plan_reads_back(tmp_path, unit):
+    """The office example with four anchors: its outline, keep-outs and zones on their
+    layers, the anchors with their heights, back to 1e-9 m; the room read back from the
+    drawing has the office's floor plan."""
+    room = Room.from_toml("../examples/office.toml")
+    a = np.array([[0.03, 1.0, 2.0], [9.97, 5.0, 2.5], [5.0, 0.03, 2.8], [4.0, 5.97, 1.5]])
+    path = write_plan(tmp_path / "office.dxf", room, a, unit=unit, surfaces=list("abcd"))
+    np.testing.assert_allclose(read_anchors(path, unit=unit), a, atol=1e-9)
+    doc = ezdxf.readfile(path)
+    layers = {e.dxf.layer for e in doc.modelspace()}
+    assert {"room", "keepouts", "zones", "anchors"} <= layers
+    n_keepouts = len(doc.modelspace().query('LWPOLYLINE[layer=="keepouts"]'))
+    assert n_keepouts == len(room.keepouts)
+    back = Room.from_dxf(path, room.size[2], unit=unit)
+    assert back.size == room.size and back.is_shoebox
+
+
+def test_the_export_and_plan_commands_take_dxf(tmp_path, capsys):
+    """``anchorplan export`` writes a plan's DXF; ``--room plan.dxf --room-height`` reads a
+    floor plan; a missing height names its flag."""
+    room = Room.from_corners(L_CORNERS, 3.0, name="lab")
+    a = np.array([[0.03, 1.0, 2.0], [6.97, 1.5, 2.5], [1.5, 5.97, 2.0], [4.0, 0.03, 1.0]])
+    res = tmp_path / "res"
+    res.mkdir()
+    (res / "result.json").write_text(json.dumps({"room": room.to_dict(), "anchors": a.tolist()}))
+    dxf = tmp_path / "lab.dxf"
+    assert main(["export", str(res), "--dxf", str(dxf)]) == 0
+    np.testing.assert_allclose(read_anchors(dxf), a, atol=1e-9)
+    assert main(["bounds", "--room", str(dxf), "--room-height", "3"]) == 0
+    assert "PEB" in capsys.readouterr().out
+    assert main(["bounds", "--room", str(dxf)]) == 2
+    assert "--room-height" in capsys.readouterr().err
+    assert main(["export", str(tmp_path / "none"), "--dxf", str(dxf)]) == 2
