@@ -75,6 +75,12 @@ def _init_worker(parent: int, markers: str) -> None:
     threading.Thread(target=_watch_parent, args=(parent, markers), daemon=True).start()
     # SIGINT goes to the whole process group on Ctrl-C: let the parent handle it
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # one BLAS thread per worker: the pool already has a process per core, and BLAS
+    # threads on top of it oversubscribe the cores (a long receiver window's small matrix
+    # products ran 2.5 times slower so; BENCHMARKS.md, "The receiver")
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1, user_api="blas")
 
 
 def _run_task(marker: str, fn, args, kwargs):

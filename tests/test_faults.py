@@ -292,3 +292,16 @@ def test_run_jobs_on_a_plain_pool_that_breaks_raises_executor_broken(tmp_path):
     with ProcessPoolExecutor(max_workers=1) as pool:
         with pytest.raises(ExecutorBroken, match="WorkerPool"):
             run_jobs(pool, _die_once, [(marker, 1)])
+
+
+def _blas_threads() -> int:
+    from threadpoolctl import threadpool_info
+
+    return max((d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"), default=1)
+
+
+def test_a_worker_runs_one_blas_thread():
+    """The pool has a process per core; a worker's BLAS keeps to one thread, so that the
+    processes do not oversubscribe the cores (results do not depend on it)."""
+    with WorkerPool(2) as pool:
+        assert pool.submit(_blas_threads).result() == 1
