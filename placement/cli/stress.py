@@ -1,0 +1,67 @@
+"""``anchorplan stress``: what if an anchor fails, the air is warmer, the mounting sloppier."""
+
+from __future__ import annotations
+
+import json
+import time
+
+from placement.cli.common import output_file
+from simulation import checks
+
+
+def register(sub) -> None:
+    """Add ``anchorplan stress`` and its arguments to the subcommand parsers ``sub``."""
+    p = sub.add_parser(
+        "stress",
+        help="what if: one anchor down, the air warmer or colder, mounting error",
+        description="Read RESULT_DIR/result.json (or evaluation.json) and simulate the layout "
+        "with each anchor down, with the air 5 and 10 degC off the room's temperature while "
+        "the receiver keeps the configured speed of sound, and mounted within 0, 1, 3, 5 and "
+        "10 cm of the plan. Prints the tables and writes RESULT_DIR/stress.json.",
+    )
+    p.add_argument("result_dir", metavar="RESULT_DIR", help="folder with result.json")
+    p.add_argument("--realizations", type=int, default=10, help="noise draws (10)")
+    p.add_argument("--draws", type=int, default=10, help="mounting draws per tolerance (10)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (0)")
+    p.add_argument("--out", metavar="FILE.json", help="output file (RESULT_DIR/stress.json)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run ``anchorplan stress`` on parsed ``args``; the exit status (0: done)."""
+    from analysis.report_data import load_results, main_anchors, room_of
+    from placement.stress import stress
+
+    result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
+    out = output_file("--out", args.out or result_dir / "stress.json", suffixes=(".json",))
+    checks.count("--realizations", args.realizations, low=1, high=10_000)
+    checks.count("--draws", args.draws, low=1, high=10_000)
+    checks.count("--seed", args.seed, low=0)
+    try:
+        data = load_results(result_dir)
+        room, anchors = room_of(data), main_anchors(data)
+    except (ValueError, FileNotFoundError) as exc:
+        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
+    t0 = time.perf_counter()
+    res = stress(room, anchors, realizations=args.realizations, draws=args.draws, rng=args.seed)
+    _print(res)
+    out.write_text(json.dumps(res.to_dict(), indent=1) + "\n")
+    print(f"wrote {out} ({time.perf_counter() - t0:.0f} s)")
+    return 0
+
+
+def _print(res) -> None:
+    print("one anchor down        sigma    mean     P95  availability  hearing >= 4")
+    for r in res.anchor_down:
+        mark = "  <- worst" if r["anchor"] == res.worst_anchor else ""
+        print(f"  anchor {r['anchor'] + 1:2d} down   {r['std']:6.3f}  {r['mean']:6.3f}  "
+              f"{r['p95']:6.3f}  {100 * r['availability']:10.2f} %  "
+              f"{100 * r['covered_share']:10.1f} %{mark}")  # fmt: skip
+    print("air temperature        sigma    mean     P95  availability")
+    for r in res.temperature:
+        print(f"  {r['offset']:+5.1f} degC ({r['temperature']:4.1f})  {r['std']:6.3f}  "
+              f"{r['mean']:6.3f}  {r['p95']:6.3f}  {100 * r['availability']:10.2f} %")  # fmt: skip
+    print("mounting tolerance     sigma    mean     P95  availability")
+    for r in res.mounting:
+        print(f"  {100 * r['tolerance']:5.1f} cm            {r['std']:6.3f}  {r['mean']:6.3f}  "
+              f"{r['p95']:6.3f}  {100 * r['availability']:10.2f} %")  # fmt: skip
