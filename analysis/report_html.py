@@ -407,6 +407,45 @@ def _validation_section(ctx: Context) -> list[str]:
     return ["<h2>Validation</h2>", *parts] if parts else []
 
 
+def _what_if_section(ctx: Context) -> list[str]:
+    """The what-if tables of ``anchorplan stress`` (RESULT_DIR/stress.json), when present."""
+    path = ctx.result_dir / "stress.json"
+    if not path.is_file():
+        return []
+    try:
+        w = json.loads(path.read_text())
+        down, temp, mount = w["anchor_down"], w["temperature"], w["mounting"]
+        worst = int(w["worst_anchor"])
+    except (ValueError, KeyError, TypeError):
+        return ['<h2>What if</h2><p class="sub">stress.json is unreadable.</p>']
+
+    def cells(r):
+        return [_num(r["std"]), _num(r["mean"]), _num(r["p95"]), _percent(r["availability"])]
+
+    stats = ["σ (m)", "mean (m)", "P95 (m)", "availability"]
+    rows = [[f"{r['anchor'] + 1}" + (" (worst)" if r["anchor"] == worst else ""), *cells(r),
+             _percent(r["covered_share"])] for r in down]  # fmt: skip
+    return [
+        "<h2>What if</h2>",
+        '<p class="sub">From <code>anchorplan stress</code>: the full simulation with one '
+        "anchor down, with the air warmer or colder than the receiver's configured speed of "
+        "sound assumes, and with the anchors mounted within a tolerance of the plan "
+        f"(seed {w.get('seed')}).</p>",
+        "<h3>One anchor down</h3>",
+        _table(["anchor down", *stats, "hearing ≥ 4"], rows, left=0),
+        "<h3>Air temperature</h3>",
+        _table(
+            ["offset (°C)", *stats], [[f"{r['offset']:+g}", *cells(r)] for r in temp], left=0
+        ),  # fmt: skip
+        "<h3>Mounting tolerance</h3>",
+        _table(
+            ["tolerance (cm)", *stats],
+            [[f"{100 * r['tolerance']:g}", *cells(r)] for r in mount],
+            left=0,
+        ),  # fmt: skip
+    ]
+
+
 def _figures_section(ctx: Context) -> list[str]:
     return ["<h2>Figures</h2>", *_figures_html(ctx, "figures")]
 
@@ -552,6 +591,7 @@ def render(ctx: Context) -> str:
         *_layout_section(ctx),
         *_comparison_section(ctx),
         *_validation_section(ctx),
+        *_what_if_section(ctx),
         *_figures_section(ctx),
         *_other_coordinates(ctx),
         *_settings_section(ctx),

@@ -58,6 +58,10 @@ def test_the_stress_command(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "worst" in out and "mounting tolerance" in out
     assert json.loads((res / "stress.json").read_text())["kind"] == "stress"
+    # the report shows the what-if tables after the validation
+    assert main(["report", str(res), "--realizations", "0"]) == 0
+    html = (res / "report.html").read_text()
+    assert "<h2>What if</h2>" in html and "(worst)" in html and "Mounting tolerance" in html
     assert main(["stress", str(tmp_path / "none")]) == 2
     with pytest.raises(ValueError, match="anchors"):
         stress(ROOM, A[:4])
