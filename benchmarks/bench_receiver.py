@@ -41,9 +41,10 @@ from _common import emit
 
 from placement.rangetable import mounted_points
 from placement.validation import random_nodes
-from simulation import Receiver, Room, Signal
+from simulation import Room, Signal
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.positioning import locate
+from simulation.signal import closing_window
 
 ALL = ("floor", "ceiling", "south", "north", "west", "east")
 ROOMS = {
@@ -52,13 +53,11 @@ ROOMS = {
         Room.techtile(), name="ordinary-room", absorption={k: 0.2 for k in ALL}
     ),
 }
-FS, CHIRP = 192e3, 30e-3
 
 
 def design(window_ms: float, pick: str) -> Signal:
     """The window of ``window_ms`` ending with the chirp, with ``pick``."""
-    n = int(round(window_ms * 1e-3 * FS))
-    return Signal(receiver=Receiver(window=n, t_wake=CHIRP - n / FS, pick=pick))
+    return closing_window(Signal(), window_ms * 1e-3, pick)
 
 
 def stats(errors) -> dict:

@@ -1,6 +1,7 @@
 """What a longer receiver window costs the simulator, per window and per evaluation.
 
 Run: python benchmarks/bench_receiver_speed.py [--windows 1 2 5 10 20 30] [--repeat 3]
+     python benchmarks/bench_receiver_speed.py --plan [--workers 2]
 
 For windows of W ms closing with the 30 ms chirp (the receiver study's designs), in the
 techtile room with the 8-anchor layout of ``layout.json`` next to this script's argument
@@ -16,11 +17,16 @@ techtile room with the 8-anchor layout of ``layout.json`` next to this script's 
 
 each the best of ``--repeat`` runs, and its ratio to the 1 ms window's measured in the same
 run.
+
+``--plan``: the README's plan (M = 8, seed 0, the plan's defaults, ``--workers`` processes)
+with the paper's receiver and with a 20 ms window from 10 ms with the first-path pick, one
+after the other: one JSON line each with its seconds, and the ratio.
 """
 
 import argparse
 import dataclasses
 import json
+import time
 
 import numpy as np
 from _common import best_time, emit
@@ -53,12 +59,47 @@ def figures(room: Room, anchors, repeat: int) -> dict:
     return out
 
 
+def plans(workers: int) -> None:
+    """The two plans of ``--plan`` (module docstring)."""
+    from placement import seed_then_pso
+    from placement.workers import WorkerPool
+
+    base = Room.techtile()
+    designs = {
+        "1ms-paper": Signal(),
+        "20ms-first-path": closing_window(Signal(), 0.02, "first-path"),
+    }
+    seconds = {}
+    for label, sig in designs.items():
+        room = dataclasses.replace(base, signal=sig)
+        with WorkerPool(workers) as pool:
+            t0 = time.perf_counter()
+            res = seed_then_pso(
+                room,
+                8,
+                rng=0,
+                executor=pool,
+                workers=workers,
+                progress=False,
+                validate_realizations=100,
+            )  # as `anchorplan plan`
+            seconds[label] = time.perf_counter() - t0
+        emit("receiver_plan", design=label, seconds=seconds[label], workers=workers,
+             std=res.validation["std"], mean=res.validation["mean"], p95=res.validation["p95"],
+             ratio=seconds[label] / seconds["1ms-paper"])  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--windows", type=float, nargs="+", default=[1, 2, 5, 10, 20, 30])
     ap.add_argument("--layout", metavar="DIR", help="a plan folder with layout.json")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--plan", action="store_true", help="time the two plans instead")
+    ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
+    if args.plan:
+        plans(args.workers)
+        return
     base = Room.techtile()
     if args.layout:
         anchors = np.array(json.load(open(f"{args.layout}/layout.json"))["anchors"])

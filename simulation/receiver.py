@@ -433,7 +433,7 @@ class Dsp:
         kc[: L + 1] = kernel[L:]
         kc[self.n_hp - L :] = kernel[:L]
         cdt = np.result_type(self.dtype, np.complex64)
-        self._K_hat = scipy.fft.rfft(kc).astype(cdt)
+        K_hat = scipy.fft.rfft(kc)
         # the end corrections: the exact map on the first and last L inputs minus the kernel
         cols = np.r_[0:L, N - L : N]
         unit = np.zeros((N, 2 * L))
@@ -442,28 +442,33 @@ class Dsp:
         lag = np.arange(N)[:, None] - cols[None, :]
         conv = np.where(np.abs(lag) <= L, kernel[np.clip(lag + L, 0, 2 * L)], 0.0)
         E = exact - conv
-        self._E_top_T = np.ascontiguousarray(E[:L, :L].T).astype(self.dtype)
-        self._E_bot_T = np.ascontiguousarray(E[N - L :, L:].T).astype(self.dtype)
+        E_top_T, E_bot_T = np.ascontiguousarray(E[:L, :L].T), np.ascontiguousarray(E[N - L :, L:].T)
         # c = correlate(ref, y, "full") = convolve(ref, y reversed), lags 0 … Nc − 1; the
         # reversal's phase e^{−2πif(N − 1)/nfft} is folded into the reference's spectrum
         self.n_xc = scipy.fft.next_fast_len(self.n_corr, real=True)  # no wrap-around
         f = np.arange(self.n_xc // 2 + 1)
         shift = np.exp(-2j * np.pi * ((f * (N - 1)) % self.n_xc) / self.n_xc)  # exact turns
-        self._R_hat = (scipy.fft.rfft(ref, n=self.n_xc) * shift).astype(cdt)
+        R_hat = scipy.fft.rfft(ref, n=self.n_xc) * shift
+        #: the FFT form's maps (K̂, R̂, E_topᵀ, E_botᵀ) in double precision, and in this DSP's
+        self._maps64 = (K_hat, R_hat, E_top_T, E_bot_T)
+        self._maps = (K_hat.astype(cdt), R_hat.astype(cdt),
+                      E_top_T.astype(self.dtype), E_bot_T.astype(self.dtype))  # fmt: skip
 
-    def _fft_correlate(self, x: np.ndarray, out: np.ndarray) -> None:
+    def _fft_correlate(self, x: np.ndarray, out: np.ndarray, maps=None) -> None:
         """Steps 1–2 with FFTs for windows x (B, N) into ``out`` (B, nfft): c at lags
-        0 … Nc − 1, zeros after."""
+        0 … Nc − 1, zeros after; ``maps`` the FFT form's maps (default this DSP's
+        precision's)."""
         N, L = self.receiver.window, self.edge
+        K_hat, R_hat, E_top_T, E_bot_T = self._maps if maps is None else maps
         spec = scipy.fft.rfft(x, n=self.n_hp, axis=-1, workers=1)
-        spec *= self._K_hat
+        spec *= K_hat
         y = scipy.fft.irfft(spec, n=self.n_hp, axis=-1, workers=1)[:, :N]
-        y[:, :L] += x[:, :L] @ self._E_top_T
-        y[:, N - L :] += x[:, N - L :] @ self._E_bot_T
+        y[:, :L] += x[:, :L] @ E_top_T
+        y[:, N - L :] += x[:, N - L :] @ E_bot_T
         # the spectrum of y reversed, y[N − 1 − n], is conj(Ŷ) times e^{−2πif(N − 1)/nfft}
         spec = scipy.fft.rfft(y, n=self.n_xc, axis=-1, workers=1)
         np.conjugate(spec, out=spec)
-        spec *= self._R_hat
+        spec *= R_hat
         out[:, : self.n_corr] = scipy.fft.irfft(spec, n=self.n_xc, axis=-1, workers=1)[
             :, : self.n_corr
         ]
@@ -482,20 +487,10 @@ class Dsp:
                     unit = np.zeros((min(256, N - s), N))
                     unit[np.arange(len(unit)), s + np.arange(len(unit))] = 1.0
                     rows = buf[: len(unit)]
-                    self._fft_correlate_f64(unit, rows)
+                    self._fft_correlate(unit, rows, self._maps64)
                     g2 += np.einsum("bk,bk->k", rows[:, : self.n_corr], rows[:, : self.n_corr])
             self._noise_gain = np.sqrt(g2)
         return self._noise_gain
-
-    def _fft_correlate_f64(self, x: np.ndarray, out: np.ndarray) -> None:
-        """:meth:`_fft_correlate` in double precision, whatever this DSP's precision."""
-        saved = self._K_hat, self._R_hat, self._E_top_T, self._E_bot_T
-        try:
-            self._K_hat, self._R_hat = (a.astype(np.complex128) for a in saved[:2])
-            self._E_top_T, self._E_bot_T = (a.astype(float) for a in saved[2:])
-            self._fft_correlate(x, out)
-        finally:
-            self._K_hat, self._R_hat, self._E_top_T, self._E_bot_T = saved
 
     def correlation(self, windows: np.ndarray) -> np.ndarray:
         """(B, Nc) raw curve |c| of windows (B, N)."""
@@ -503,7 +498,7 @@ class Dsp:
         if self.form == "matrix":
             return np.abs(w @ self.G_T)
         out = np.empty((len(w), self.nfft))
-        self._fft_correlate_f64(w, out)
+        self._fft_correlate(w, out, self._maps64)
         return np.abs(out[:, : self.n_corr])
 
     def lowpass(self, curve: np.ndarray) -> np.ndarray:

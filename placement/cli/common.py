@@ -226,3 +226,15 @@ def write_json(path: str | Path, obj: Any) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(to_jsonable(obj), indent=2) + "\n")
     return path
+
+
+def load_plan(result_dir):
+    """(room, anchors (M, 3)) of a result folder (``result.json``, else
+    ``evaluation.json``); ValueError naming RESULT_DIR when it has neither or they are bad."""
+    from analysis.report_data import load_results, main_anchors, room_of
+
+    try:
+        data = load_results(result_dir)
+        return room_of(data), main_anchors(data)
+    except (ValueError, FileNotFoundError) as exc:
+        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None

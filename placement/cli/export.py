@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from placement.cli.common import output_file
+from placement.cli.common import load_plan, output_file
 from simulation import checks
 
 
@@ -23,17 +23,12 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan export`` on parsed ``args``; the exit status (0: done)."""
-    from analysis.report_data import load_results, main_anchors, room_of
     from placement.surfaces import mounting_surfaces, surface_index
     from simulation.dxf import write_plan
 
     result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
     out = output_file("--dxf", args.dxf, suffixes=(".dxf",))
-    try:
-        data = load_results(result_dir)
-        room, anchors = room_of(data), main_anchors(data)
-    except (ValueError, FileNotFoundError) as exc:
-        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
+    room, anchors = load_plan(result_dir)
     surfs = mounting_surfaces(room)
     names = [surfs[i].name if i >= 0 else "" for i in surface_index(room, anchors, tol=1e-6)]
     write_plan(out, room, anchors, unit=args.unit, surfaces=names)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import time
 
-from placement.cli.common import output_file
+from placement.cli.common import load_plan, output_file
 from simulation import checks
 
 
@@ -29,7 +29,6 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan stress`` on parsed ``args``; the exit status (0: done)."""
-    from analysis.report_data import load_results, main_anchors, room_of
     from placement.stress import stress
 
     result_dir = checks.input_dir("RESULT_DIR", args.result_dir)
@@ -37,11 +36,7 @@ def run(args) -> int:
     checks.count("--realizations", args.realizations, low=1, high=10_000)
     checks.count("--draws", args.draws, low=1, high=10_000)
     checks.count("--seed", args.seed, low=0)
-    try:
-        data = load_results(result_dir)
-        room, anchors = room_of(data), main_anchors(data)
-    except (ValueError, FileNotFoundError) as exc:
-        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
+    room, anchors = load_plan(result_dir)
     t0 = time.perf_counter()
     res = stress(room, anchors, realizations=args.realizations, draws=args.draws, rng=args.seed)
     _print(res)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import json
 import re
 import time
 
@@ -112,18 +111,18 @@ def run(args) -> int:
     room = apply_signal(args, load_room(args.room, args))
     rooms = designs(args, room)
     if list(rooms) == [""]:
-        return _run_one(args, room, out)
+        _run_one(args, room, out)
+        return 0
     summary = []
     for label, r in rooms.items():
         print(f"receiver design {label}", flush=True)
-        _run_one(args, r, out / label)
-        res = json.loads((out / label / "sweep.json").read_text())
+        res = _run_one(args, r, out / label)
         rx = r.signal.receiver
         summary += [
             {"design": label, "window": rx.window, "t_wake": rx.t_wake, "pick": rx.pick,
-             "samples_per_fix": rx.window * row["M"], **{k: row[k] for k in
+             "samples_per_fix": rx.window * row.M, **{k: getattr(row, k) for k in
              ("M", "std", "mean", "p95", "availability", "seconds")}}
-            for row in res["rows"]
+            for row in res.rows
         ]  # fmt: skip
     write_json(out / "designs.json", {"kind": "receiver designs", "rows": summary})
     print(" design               M   sigma    mean     P95  availability  samples/fix")
@@ -136,8 +135,8 @@ def run(args) -> int:
     return 0
 
 
-def _run_one(args, room, out) -> int:
-    """One sweep of M for one room (and its signal design) into ``out``."""
+def _run_one(args, room, out):
+    """One sweep of M for one room (and its signal design) into ``out``; its result."""
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
@@ -184,7 +183,7 @@ def _run_one(args, room, out) -> int:
     write_json(out / "layouts.json", {str(r.M): r.anchors for r in res.rows})
     _print_table(res, paper)
     print(f"wrote {out / 'sweep.json'} and {out / 'sweep.png'} ({time.perf_counter() - t0:.0f} s)")
-    return 0
+    return res
 
 
 def _print_table(res, paper) -> None:
