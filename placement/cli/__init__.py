@@ -17,6 +17,7 @@ COMMANDS = (
     "report",
     "peb_map",
     "export",
+    "sheet",
     "stress",
 )
 

@@ -237,4 +237,7 @@ def load_plan(result_dir):
         data = load_results(result_dir)
         return room_of(data), main_anchors(data)
     except (ValueError, FileNotFoundError) as exc:
-        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None
+        msg = str(exc)  # name the folder once
+        raise ValueError(
+            msg if msg.startswith("RESULT_DIR") else f"RESULT_DIR {result_dir}: {msg}"
+        ) from None

@@ -1,0 +1,258 @@
+"""The mounting sheet: a plan's anchors as an installer measures them.
+
+Each anchor is described on the surface it is mounted on (:mod:`simulation.mounting`):
+
+- on a wall (or a vertical face of a mountable obstacle): the distance along the wall from
+  its **reference corner**, the wall's left end as seen from inside the room facing the
+  wall (a shoebox's south wall: its south-east corner), the height above the floor, and
+  the distance the speaker's acoustic centre stands off the wall (the room's
+  ``anchor_offset``);
+- on the ceiling (or the floor, or an obstacle's top): x and y from the room's reference
+  corner (its first floor-plan corner: a shoebox's south–west corner; an obstacle's top:
+  its corner of least x and y), and the height above the floor.
+
+The aim is the direction the simulator points the speaker's cardioid (paper §V-A: at the
+room's centroid) as azimuth (degrees from +x toward +y) and elevation (degrees above the
+horizontal); on a vertical surface also as a pan from the surface's normal, positive toward
+its reference corner, which is how one turns a bracket. The mounting tolerance is the one
+the plan assumed (its search's ``mount_tolerance``).
+
+The CSV keeps millimetres (metres with three decimals) and a tenth of a degree; the numbers
+read back through :func:`anchors_from_csv` give every coordinate to within 1 mm. The
+printable sheet (:mod:`placement.sheet_html`) draws the same numbers.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from placement.surfaces import mounting_surfaces, surface_index
+from simulation import checks
+from simulation.directivity import aim_vectors
+from simulation.room import Room, as_room
+
+#: the CSV's columns, in order
+COLUMNS = (
+    "id", "surface", "reference", "reference_x_m", "reference_y_m", "along_m", "height_m",
+    "plan_x_m", "plan_y_m", "off_surface_m", "aim_azimuth_deg", "aim_elevation_deg",
+    "aim_pan_deg", "tolerance_m", "room_x_m", "room_y_m", "room_z_m",
+)  # fmt: skip
+
+#: a shoebox's corners in floor-plan order
+_COMPASS = ("south-west", "south-east", "north-east", "north-west")
+
+#: how far (m) a point may lie off a mounting plane and still be on it
+_ON = 1e-6
+
+
+@dataclass(frozen=True)
+class Mount:
+    """One anchor as mounted (module docstring); lengths in m, angles in degrees.
+
+    ``kind`` is ``"wall"`` (a vertical surface: ``along`` is set, ``plan_x``/``plan_y``
+    are None), ``"plane"`` (a horizontal one: ``plan_x``, ``plan_y`` set, ``along`` and
+    ``pan`` None) or ``"free"`` (on no mounting surface: only the room coordinates).
+    """
+
+    id: int
+    surface: str
+    kind: str
+    reference: str
+    reference_xy: tuple[float, float]
+    along: float | None
+    height: float
+    plan_x: float | None
+    plan_y: float | None
+    off_surface: float
+    azimuth: float
+    elevation: float
+    pan: float | None
+    tolerance: float | None
+    position: tuple[float, float, float]
+
+    def row(self) -> dict[str, str]:
+        """The CSV row: metres to the millimetre, degrees to a tenth; blank where unset."""
+
+        def m(x):
+            return "" if x is None else f"{x:.3f}"
+
+        def deg(x):
+            return "" if x is None else f"{x:.1f}"
+
+        values = (self.id, self.surface, self.reference, m(self.reference_xy[0]),
+                  m(self.reference_xy[1]), m(self.along), m(self.height), m(self.plan_x),
+                  m(self.plan_y), m(self.off_surface), deg(self.azimuth), deg(self.elevation),
+                  deg(self.pan), m(self.tolerance), *(m(v) for v in self.position))  # fmt: skip
+        return dict(zip(COLUMNS, (str(v) for v in values), strict=True))
+
+
+@dataclass(frozen=True)
+class VerticalFrame:
+    """A vertical mounting surface as the installer sees it: its ``reference`` corner
+    ``start`` (2,) (the left end seen from the room), the unit ``right`` (2,) along it
+    away from that corner, the unit ``normal`` (2,) into the room, its ``length`` and the
+    height span ``bottom``–``top`` (m)."""
+
+    name: str
+    reference: str
+    start: tuple[float, float]
+    right: tuple[float, float]
+    normal: tuple[float, float]
+    length: float
+    bottom: float
+    top: float
+
+
+def corner_names(room: Room) -> list[str]:
+    """The floor plan's corners as an installer names them: a shoebox's by the compass,
+    a polygonal room's corner i by the walls that meet there (``"west/south"``)."""
+    room = as_room(room)
+    if room.is_shoebox:
+        return list(_COMPASS)
+    names = room.wall_names
+    return [f"{names[i - 1]}/{names[i]}" for i in range(len(names))]
+
+
+def vertical_frames(room: Room) -> dict[str, VerticalFrame]:
+    """The frame of every vertical mounting surface by name: the room's walls (reference:
+    the corner at the wall's end, its left end seen from inside) and the vertical faces of
+    its mountable obstacles (reference: the face's left edge seen from the room)."""
+    room = as_room(room)
+    corners = corner_names(room)
+    out = {}
+    for i, wall in enumerate(room.walls):
+        d = wall.direction[:2]
+        out[wall.name] = VerticalFrame(
+            wall.name, f"{corners[(i + 1) % len(corners)]} corner", tuple(wall.end),
+            tuple(-d), tuple(wall.normal[:2]), wall.length, 0.0, wall.height,
+        )  # fmt: skip
+    obstacles = {ob.name or f"obstacle-{k}": ob for k, ob in enumerate(room.obstacles)}
+    for s in mounting_surfaces(room):
+        if ":" not in s.name or abs(s.normal[2]) > 0.5:
+            continue
+        ob = obstacles[s.name.rsplit(":", 1)[0]]
+        n = np.asarray(s.normal[:2])
+        right = np.array([-n[1], n[0]])
+        axis = int(np.argmax(np.abs(n)))
+        at = ob.hi[axis] if n[axis] > 0 else ob.lo[axis]
+        pts = np.empty((2, 2))  # the face's two vertical edges in plan
+        pts[:, axis], pts[:, 1 - axis] = at, (ob.lo[1 - axis], ob.hi[1 - axis])
+        start = pts[np.argmin(pts @ right)]
+        out[s.name] = VerticalFrame(
+            s.name, f"{s.name} left edge", tuple(float(v) for v in start), tuple(right),
+            tuple(n), float(ob.hi[1 - axis] - ob.lo[1 - axis]), float(ob.lo[2]), float(ob.hi[2]),
+        )  # fmt: skip
+    return out
+
+
+def _plane_reference(room: Room, surface: str) -> tuple[str, tuple[float, float]]:
+    """The reference corner (name, (x, y)) of a horizontal surface."""
+    if ":" in surface:
+        ob = {o.name or f"obstacle-{k}": o for k, o in enumerate(room.obstacles)}[
+            surface.rsplit(":", 1)[0]
+        ]
+        return f"{surface} corner", (float(ob.lo[0]), float(ob.lo[1]))
+    c = room.floor_corners[0]
+    return f"{corner_names(room)[0]} corner", (float(c[0]), float(c[1]))
+
+
+def mounts(room: Room, anchors, tolerance: float | None = None) -> list[Mount]:
+    """The mounting description of each anchor (M, 3) m in ``room`` (module docstring);
+    ``tolerance`` (m) is the mounting tolerance the plan assumed (None: not stated)."""
+    room = as_room(room)
+    a = checks.points("anchors", anchors)
+    if tolerance is not None:
+        tolerance = checks.real("tolerance", tolerance, low=0.0, high=1.0, unit="m")
+    surfs = mounting_surfaces(room)
+    index = surface_index(room, a, tol=_ON)
+    frames = vertical_frames(room)
+    aim = aim_vectors(a, room.centroid)
+    out = []
+    for j, (p, i, u) in enumerate(zip(a, index, aim, strict=True)):
+        az = math.degrees(math.atan2(u[1], u[0]))
+        el = math.degrees(math.asin(float(np.clip(u[2], -1.0, 1.0))))
+        common = {"id": j + 1, "height": float(p[2]), "azimuth": az, "elevation": el,
+                  "tolerance": tolerance, "position": tuple(float(v) for v in p)}  # fmt: skip
+        name = surfs[i].name if i >= 0 else ""
+        if name in frames:
+            f = frames[name]
+            rel = p[:2] - np.asarray(f.start)
+            out.append(Mount(surface=name, kind="wall", reference=f.reference,
+                             reference_xy=f.start, along=float(rel @ f.right),
+                             plan_x=None, plan_y=None, off_surface=float(rel @ f.normal),
+                             pan=math.degrees(math.atan2(-(u[:2] @ f.right), u[:2] @ f.normal)),
+                             **common))  # fmt: skip
+        elif i >= 0:
+            ref, xy = _plane_reference(room, name)
+            off = abs(float(surfs[i].height(p)) + room.anchor_offset)
+            out.append(Mount(surface=name, kind="plane", reference=ref, reference_xy=xy,
+                             along=None, plan_x=float(p[0] - xy[0]), plan_y=float(p[1] - xy[1]),
+                             off_surface=off, pan=None, **common))  # fmt: skip
+        else:
+            out.append(Mount(surface="", kind="free", reference="room origin",
+                             reference_xy=(0.0, 0.0), along=None, plan_x=float(p[0]),
+                             plan_y=float(p[1]), off_surface=0.0, pan=None, **common))  # fmt: skip
+    return out
+
+
+def write_csv(path, rows: list[Mount]) -> Path:
+    """Write the mounts as ``anchors.csv`` (columns :data:`COLUMNS`) to ``path``."""
+    path = Path(path)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=COLUMNS)
+        w.writeheader()
+        for r in rows:
+            w.writerow(r.row())
+    return path
+
+
+def anchors_from_csv(path, room: Room) -> np.ndarray:
+    """(M, 3) m the anchors an installer places from the CSV at ``path``, in ID order: on a
+    wall, its reference corner plus ``along`` along the wall and ``off_surface`` into the
+    room at ``height``; on a horizontal surface, its reference corner plus (plan x, plan y)
+    at ``height``; free anchors at their room coordinates. Only the installer's numbers
+    are read, not the room coordinates the file also lists."""
+    room = as_room(room)
+    frames = vertical_frames(room)
+    with Path(path).open(newline="") as fh:
+        rows = sorted(csv.DictReader(fh), key=lambda r: int(r["id"]))
+    out = []
+    for r in rows:
+        ref = np.array([float(r["reference_x_m"]), float(r["reference_y_m"])])
+        if r["along_m"]:
+            f = frames[r["surface"]]
+            xy = ref + float(r["along_m"]) * np.asarray(f.right)
+            xy = xy + float(r["off_surface_m"]) * np.asarray(f.normal)
+        else:
+            xy = ref + np.array([float(r["plan_x_m"]), float(r["plan_y_m"])])
+        out.append([xy[0], xy[1], float(r["height_m"])])
+    return np.array(out, dtype=float).reshape(-1, 3)
+
+
+def write_sheet(out_dir, room: Room, anchors, *, tolerance: float | None = None,
+                title: str | None = None) -> dict[str, Path]:  # fmt: skip
+    """Write ``anchors.csv`` and the printable ``sheet.html`` (:mod:`placement.sheet_html`)
+    of the layout ``anchors`` (M, 3) m in ``room`` to the folder ``out_dir`` (created);
+    the paths written, by name."""
+    from placement.sheet_html import render
+
+    room = as_room(room)
+    rows = mounts(room, anchors, tolerance)
+    out = checks.output_path("out_dir", out_dir, kind="dir")
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"csv": write_csv(out / "anchors.csv", rows)}
+    html = render(room, rows, title=title or f"Mounting sheet: {room.name}")
+    (out / "sheet.html").write_text(html)
+    paths["html"] = out / "sheet.html"
+    return paths
+
+
+def as_dicts(rows: list[Mount]) -> list[dict]:
+    """The mounts as JSON-ready dicts."""
+    return [dataclasses.asdict(r) for r in rows]
