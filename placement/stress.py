@@ -26,8 +26,7 @@ from typing import Any
 import numpy as np
 
 from analysis.coverage import covered_share
-from placement.rangetable import mounted_points
-from placement.validation import summary
+from placement.validation import mounted_errors, summary
 from simulation import checks
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.positioning import locate
@@ -91,17 +90,10 @@ def _temperature(room: Room, a: np.ndarray, nodes, R: int, offsets, seed: int) -
 
 
 def _mounting(room: Room, a: np.ndarray, nodes, tolerances, draws: int, seed: int) -> list:
-    ids = np.arange(len(a))
-    region = (np.zeros(3), np.asarray(room.size, float))
     rows = []
     for tol in tolerances:
-        errors = []
-        for d in range(draws):
-            mounted = mounted_points(room, a, ids, d, float(tol), False, seed)
-            scene = RangingScene(room, mounted, nodes)
-            rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(14, d)))
-            x = locate(a, scene.ranges(rng), region=region)
-            errors.append(np.linalg.norm(x - nodes, axis=-1))
+        errors = [mounted_errors(room, a, nodes, float(tol), d, seed, stream=14)
+                  for d in range(draws)]  # fmt: skip
         rows.append({"tolerance": float(tol), **_row(errors)})
     return rows
 

@@ -116,15 +116,20 @@ def _evaluate(room, anchors, nodes, realizations, seed, precision):
     )
 
 
-def _mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision) -> np.ndarray:
-    """(P,) errors when the anchors are mounted as in draw ``draw`` (one noise draw)."""
-    from simulation.evaluation import RangingScene
+def mounted_errors(
+    room, anchors, nodes, tolerance, draw, seed, precision=None, stream: int = 7
+) -> np.ndarray:
+    """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
+    ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
+    stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors,
+    bounded to the room (``precision``: the receiver DSP's, None for the default)."""
+    from simulation.evaluation import DEFAULT_PRECISION, RangingScene
     from simulation.positioning import locate
 
     ids = np.arange(len(anchors))
     mounted = mounted_points(room, anchors, ids, draw, tolerance, False, seed)
-    scene = RangingScene(room, mounted, nodes, precision=precision)
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(7, draw)))
+    scene = RangingScene(room, mounted, nodes, precision=precision or DEFAULT_PRECISION)
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream, draw)))
     x = locate(anchors, scene.ranges(rng), region=(np.zeros(3), np.asarray(room.size, float)))
     return np.linalg.norm(x - nodes, axis=-1)
 
@@ -182,7 +187,7 @@ def validate_layout(
         calls["held_random"] = [(_evaluate, (room, a, rnd, R, child[3], opt.precision))]
     if opt.mount_draws and mount_tolerance > 0:
         calls["mounting"] = [
-            (_mounted_errors, (room, a, nodes, mount_tolerance, d, child[0], opt.precision))
+            (mounted_errors, (room, a, nodes, mount_tolerance, d, child[0], opt.precision))
             for d in range(opt.mount_draws)
         ]
     flat = [c for group in calls.values() for c in group]
