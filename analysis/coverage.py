@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from analysis.fim import DEFAULT_SIGMA
 from analysis.noise import PhysicalRangeNoise
 from simulation import checks
 from simulation.noise import DEFAULT_SNR_DB
@@ -46,7 +47,7 @@ def covered_share(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) ->
     return float(np.mean(coverage(room, anchors, nodes, snr_db) >= MIN_HEARD))
 
 
-def heard_sigma(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_SNR_DB):
+def heard_sigma(room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB):
     """(..., P, M) the range σ (m; a scalar or anything broadcasting to (..., P, M)) where
     node p hears anchor j, +inf (no information, :func:`analysis.fim.fim`) where it does
     not: the bound then counts only the anchors the receiver reports."""
@@ -55,7 +56,7 @@ def heard_sigma(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_
     return np.where(h, s, np.inf)
 
 
-def bound(room: Room, anchors, nodes, sigma=0.04, snr_db: float = DEFAULT_SNR_DB):
+def bound(room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB):
     """(..., P) PEB = √tr J⁻¹ (m) from the anchors each node hears (:func:`heard_sigma`),
     +inf at a node that hears fewer than 4 (no fix) or whose heard anchors leave J
     singular: the bound the report and the PEB maps show."""

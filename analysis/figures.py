@@ -39,6 +39,7 @@ from matplotlib.lines import Line2D
 
 from analysis.coverage import bound as _bound
 from analysis.coverage import coverage as _coverage
+from analysis.fim import DEFAULT_SIGMA
 from analysis.fim import peb as _peb
 from analysis.statistics import ecdf, error_stats
 from simulation import checks
@@ -314,7 +315,12 @@ def _draw_regions2d(ax, room: Room, iu: int, iv: int) -> None:
 
 
 def peb_plane(
-    room: Room, anchors, axis: int | str, value: float, sigma=0.04, resolution: float = 0.05
+    room: Room,
+    anchors,
+    axis: int | str,
+    value: float,
+    sigma=DEFAULT_SIGMA,
+    resolution: float = 0.05,
 ):
     """PEB (m) on the plane ``axis = value`` across the whole room.
 
@@ -356,7 +362,7 @@ def peb_map(
     room: Room,
     anchors,
     *,
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     heights: Sequence[float] | None = None,
     x_cuts: Sequence[float] = (),
     y_cuts: Sequence[float] = (),
@@ -1294,7 +1300,7 @@ def pso_evolution(
     best_anchors_history,
     *,
     iterations: Sequence[int] | None = None,
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     nodes=None,
     cost_name: str = "cost",
     unit: str = "",

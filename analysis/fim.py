@@ -46,6 +46,18 @@ def _as_inputs(anchors, positions):
     return a, p
 
 
+#: the default range standard deviation σ (m) of the bounds, the PEB cost and the plan's
+#: reported PEB: the paper's constant σ (§IV)
+DEFAULT_SIGMA = 0.04
+#: the largest scalar σ (m) a plan, a cost or a command accepts
+MAX_SIGMA = 10.0
+
+
+def check_sigma(value, name: str = "sigma") -> float:
+    """A scalar range σ (m), checked: in (0, :data:`MAX_SIGMA`]."""
+    return checks.real(name, value, low=0.0, high=MAX_SIGMA, low_open=True, unit="m")
+
+
 def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> tuple[np.ndarray, float]:
     """(w, s0): w = (s0/σ)² broadcast to (..., P, M), so 1/σ² = w / s0², with s0 the
     smallest σ. σ must be > 0 (inf allowed: weight 0). The FIM is linear in 1/σ², and the
@@ -149,7 +161,7 @@ def _rescaled(x: np.ndarray, s0: float, power: int) -> np.ndarray:
         return np.where((x == 0) | np.isinf(x), x, x * np.float64(s0) ** power)
 
 
-def fim(anchors, positions, sigma=0.04) -> np.ndarray:
+def fim(anchors, positions, sigma=DEFAULT_SIGMA) -> np.ndarray:
     """Fisher information matrix J(p) for range measurements, (..., P, 3, 3) in 1/m².
 
     J(p) = Σ_j u_j u_jᵀ / σ_j² (paper eq. 6).
@@ -167,7 +179,7 @@ def fim(anchors, positions, sigma=0.04) -> np.ndarray:
     return _rescaled(J, s0, -2)
 
 
-def crlb(anchors, positions, sigma=0.04) -> np.ndarray:
+def crlb(anchors, positions, sigma=DEFAULT_SIGMA) -> np.ndarray:
     """Position CRLB J(p)⁻¹, (..., P, 3, 3) in m²; all entries +inf where J is singular."""
     a, p = _as_inputs(anchors, positions)
 
@@ -192,7 +204,7 @@ def crlb(anchors, positions, sigma=0.04) -> np.ndarray:
     return _rescaled(C, s0, 2)
 
 
-def crlb_trace(anchors, positions, sigma=0.04) -> np.ndarray:
+def crlb_trace(anchors, positions, sigma=DEFAULT_SIGMA) -> np.ndarray:
     """tr J(p)⁻¹, (..., P) in m² — the paper's "PEB" (§IV, eq. 7); +inf where singular."""
     t, s0 = _scaled_trace(anchors, positions, sigma)
     return _rescaled(t, s0, 2)
@@ -204,7 +216,7 @@ def _scaled_trace(anchors, positions, sigma) -> tuple[np.ndarray, float]:
     return _chunked(a, p, sigma, lambda a, p, w: _trace_inverse(*_components(a, p, w)))
 
 
-def peb(anchors, positions, sigma=0.04) -> np.ndarray:
+def peb(anchors, positions, sigma=DEFAULT_SIGMA) -> np.ndarray:
     """Position error bound √tr J(p)⁻¹, (..., P) in metres; +inf where J is singular."""
     t, s0 = _scaled_trace(anchors, positions, sigma)
     return np.sqrt(t) * s0  # in range for any σ the float type holds

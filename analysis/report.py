@@ -70,9 +70,9 @@ def _evaluator():
 
 # -- simulation here -------------------------------------------------------------------------
 def _simulate_missing(ctx: Context, seed: int) -> None:
-    """Simulate (R = ``ctx.realizations``, common noise ``seed``) every layout but the seeds
-    that has no fresh simulation: the corners and naive comparisons, and the per-axis and
-    range errors the files do not store."""
+    """Simulate (R = ``ctx.realizations``, common noise ``seed``) every layout but the
+    starting layouts that has no fresh simulation: the corners and naive comparisons, and
+    the per-axis and range errors the files do not store."""
     R = ctx.realizations
     evaluate = _evaluator() if R > 0 else None
     if R == 0:
@@ -85,7 +85,7 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
     if evaluate is None:
         return
     for e in ctx.layouts:
-        if e.role == "seed" or e.fresh is not None:
+        if e.role == "initial" or e.fresh is not None:
             continue
         try:
             ctx.room.check_anchors(e.anchors)

@@ -54,7 +54,7 @@ class LayoutEntry:
 
     name: str
     anchors: np.ndarray
-    role: str  # "optimized", "evaluated", "comparison", "reference" or "seed"
+    role: str  # "optimized", "evaluated", "comparison", "reference" or "initial"
     cost: float | None = None
     sim: Simulated | None = None  # the layout's main simulated data (files first)
     fresh: Simulated | None = None  # simulated for this report (with per-axis errors)
@@ -245,7 +245,7 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def _plan_layouts(result: dict, P: int) -> tuple[LayoutEntry, list[LayoutEntry]]:
-    """The optimized layout (with its validation) and the plan's seed layouts."""
+    """The optimized layout (with its validation) and the swarm's starting layouts."""
     v = result.get("validation") or {}
     sim = _sim_from_json(v, P, v.get("realizations"), f"{RESULT_FILE} validation") if v else None
     cost = result.get("cost")
@@ -256,13 +256,14 @@ def _plan_layouts(result: dict, P: int) -> tuple[LayoutEntry, list[LayoutEntry]]
         None if cost is None else float(cost),
         sim,
     )
-    seeds = []
-    for i, s in enumerate(result.get("seeds") or []):
+    initial = []
+    # "seeds": the name in result files of earlier versions
+    for i, s in enumerate(result.get("initial", result.get("seeds")) or []):
         c = s.get("cost")
-        anchors = json_array(s["anchors"], f"seeds[{i}] anchors", 2)
-        name = f"seed {s.get('name', i + 1)}"
-        seeds.append(LayoutEntry(name, anchors, "seed", None if c is None else float(c)))
-    return best, seeds
+        anchors = json_array(s["anchors"], f"initial[{i}] anchors", 2)
+        name = f"initial {s.get('name', i + 1)}"
+        initial.append(LayoutEntry(name, anchors, "initial", None if c is None else float(c)))
+    return best, initial
 
 
 def _add_evaluation(out: list[LayoutEntry], evaluation: dict, P: int) -> None:
@@ -305,13 +306,14 @@ def collect_layouts(
     comparisons: Mapping[str, Any] | None = None,
 ) -> list[LayoutEntry]:
     """Layouts of the report in display order: optimized, evaluated, the ``comparisons``
-    (name → anchors (M, 3) or an Evaluation), the corners reference, the plan's seeds."""
+    (name → anchors (M, 3) or an Evaluation), the corners reference, the swarm's starting
+    layouts."""
     P = len(nodes)
     result, evaluation = data.get("result"), data.get("evaluation")
     out: list[LayoutEntry] = []
-    seeds: list[LayoutEntry] = []
+    initial: list[LayoutEntry] = []
     if result is not None:
-        best, seeds = _plan_layouts(result, P)
+        best, initial = _plan_layouts(result, P)
         out.append(best)
     if evaluation is not None:
         _add_evaluation(out, evaluation, P)
@@ -324,4 +326,4 @@ def collect_layouts(
     corners = room.corners_layout()
     if not any(_same(e.anchors, corners) for e in out):
         out.append(LayoutEntry("corners", corners, "reference"))
-    return out + seeds
+    return out + initial

@@ -110,7 +110,7 @@ def _peb(figs: _Figures) -> None:
             dpi=figs.dpi,
         ),
     )
-    shown = [e for e in ctx.layouts if e.role != "seed"]
+    shown = [e for e in ctx.layouts if e.role != "initial"]
     figs.add(
         "PEB at the evaluation nodes",
         f"The {len(nodes)} evaluation nodes coloured by PEB (m, σ = {sigma:g} m) on one "

@@ -292,7 +292,8 @@ def _comparison_section(ctx: Context) -> list[str]:
         "</sub> uses the node's RMS error instead, so it also counts a steady multipath "
         "bias (DOP<sub>RMS</sub> ≥ DOP). PEB over the "
         f"{len(ctx.nodes)} evaluation nodes. cost: the plan's cost of that layout "
-        f"({_e((ctx.result or {}).get('cost_name', '–'))}; seeds: first-iteration cost).</p>",
+        f"({_e((ctx.result or {}).get('cost_name', '–'))}; starting layouts: "
+        "first-iteration cost).</p>",
     ]  # fmt: skip
     return parts + _gap_section(ctx)
 
@@ -457,7 +458,7 @@ def _other_coordinates(ctx: Context) -> list[str]:
     parts = ["<h2>Coordinates of the other layouts</h2>"]
     for e in others:
         head, table = _head_of(ctx, e), _coordinates(ctx, e)
-        if e.role == "seed":
+        if e.role == "initial":
             parts.append(f"<details><summary>{head}</summary>{table}</details>")
         else:
             parts.append(f"<h3>{head}</h3>{table}")

@@ -82,7 +82,8 @@ def one_arg_cost(anchors):
 
 FAST = PSOOptions(particles=3, iterations=1)
 BAD_COUNTS = [True, False, 2.5, "3", -1, None, [3], float("nan")]
-PLAN_KW = dict(cost="peb", seeds=None, validate_realizations=0, progress=False, rng=0)
+PLAN_KW = dict(cost="peb", initial=None, swarm=FAST, progress=False, rng=0)
+PLAN_KW["validation"] = placement.ValidationOptions(realizations=0)
 BAD_REALS = [True, "1", None, float("nan"), float("inf"), [1.0], 1j]
 
 
@@ -201,44 +202,44 @@ def _optimizer_count_cases() -> None:
 
 
 def _plan_cases() -> None:
-    """Seed_then_pso: the optimizer's (plan group)."""
-    for arg, v in (
-        ("particles", 3.7),
-        ("iterations", 1.9),
-        ("seed", 1.7),
-        ("particles", True),
-        ("M", True),
-        ("finalists", 1.5),
-        ("validate_realizations", -1),
-        ("finalist_draws", 0),
-        ("finalist_exact_draws", 13),
-        ("finalist_exact_draws", 1.5),
-        ("realizations", True),
-        ("M", 300),
-        ("iterations", "2"),
-        ("sigma", "0.04"),
-    ):
-        kw = {**PLAN_KW, "particles": 3, "iterations": 1, arg: v}
-        api(
-            "counts",
-            f"seed_then_pso({arg}={v!r})",
-            arg,
-            lambda kw=kw: seed_then_pso(ROOM, **{"M": 4, **kw}),
-            group="plan",
-        )
-    # a mounting tolerance that contradicts the search's or the given table's
-    for label, extra in (
-        ("search=SearchOptions()", lambda: {"search": placement.SearchOptions()}),
-        ("search={'mount_tolerance': 0.03}", lambda: {"search": {"mount_tolerance": 0.03}}),
-        ("table=<built with 0>", lambda: {"table": range_table(ROOM, A, NODES, rng=0)}),
-    ):
-        api(
-            "options",
-            f"seed_then_pso(mount_tolerance=0.05, {label})",
-            "mount_tolerance" if "search" in label else "table",
-            lambda extra=extra: seed_then_pso(ROOM, 4, **PLAN_KW, mount_tolerance=0.05, **extra()),
-            group="plan",
-        )
+    """Seed_then_pso and its options objects: the optimizer's (plan group)."""
+    from placement.finalists import FinalistOptions
+    from placement.validation import ValidationOptions
+
+    for label, name, call in (
+        ("PSOOptions(particles=3.7)", "particles", lambda: PSOOptions(particles=3.7)),
+        ("PSOOptions(iterations=1.9)", "iterations", lambda: PSOOptions(iterations=1.9)),
+        ("PSOOptions(particles=True)", "particles", lambda: PSOOptions(particles=True)),
+        ("PSOOptions(iterations='2')", "iterations", lambda: PSOOptions(iterations="2")),
+        ("PSOOptions(eval_timeout=0)", "eval_timeout", lambda: PSOOptions(eval_timeout=0)),
+        ("FinalistOptions(count=1.5)", "count", lambda: FinalistOptions(count=1.5)),
+        ("FinalistOptions(draws=0)", "draws", lambda: FinalistOptions(draws=0)),
+        ("FinalistOptions(exact_draws=13)", "exact_draws", lambda: FinalistOptions(exact_draws=13)),
+        ("FinalistOptions(exact_draws=1.5)", "exact_draws",
+         lambda: FinalistOptions(exact_draws=1.5)),
+        ("ValidationOptions(realizations=-1)", "realizations",
+         lambda: ValidationOptions(realizations=-1)),
+        ("seed_then_pso(rng=1.7)", "rng",
+         lambda: seed_then_pso(ROOM, 4, **{**PLAN_KW, "rng": 1.7})),
+        ("seed_then_pso(M=True)", "M", lambda: seed_then_pso(ROOM, True, **PLAN_KW)),
+        ("seed_then_pso(M=300)", "M", lambda: seed_then_pso(ROOM, 300, **PLAN_KW)),
+        ("seed_then_pso(finalists=FinalistOptions(count=9))", "finalists",
+         lambda: seed_then_pso(ROOM, 4, **PLAN_KW, finalists=FinalistOptions(count=9))),
+    ):  # fmt: skip
+        api("counts", label, name, call, group="plan")
+    # a table built with another mounting tolerance than the search's
+    api(
+        "options",
+        "Planner(search=SearchOptions(mount_tolerance=0.05), table=<built with 0>)",
+        "table",
+        lambda: placement.Planner(
+            ROOM,
+            4,
+            search=placement.SearchOptions(mount_tolerance=0.05),
+            table=range_table(ROOM, A, NODES, rng=0),
+        ),  # fmt: skip
+        group="plan",
+    )
 
 
 def _ignored_option_cases() -> None:
@@ -258,39 +259,38 @@ def _ignored_option_cases() -> None:
     )
     api(
         "options",
-        "seed_then_pso(options={'particles': 4})",
-        "options",
-        lambda: seed_then_pso(ROOM, 4, options={"particles": 4}, **PLAN_KW),
+        "seed_then_pso(swarm={'particles': 4})",
+        "swarm",
+        lambda: seed_then_pso(ROOM, 4, **{**PLAN_KW, "swarm": {"particles": 4}}),
         group="plan",
     )
 
     def honoured():
-        res = seed_then_pso(ROOM, 4, options=PSOOptions(particles=4, iterations=2), **PLAN_KW)
-        return res.nfev == 8
+        kw = {**PLAN_KW, "swarm": PSOOptions(particles=4, iterations=2)}
+        return seed_then_pso(ROOM, 4, **kw).nfev == 8
 
     api(
         "options",
-        "seed_then_pso(options=PSOOptions(particles=4, iterations=2)) runs 4 x 2",
-        "options",
+        "seed_then_pso(swarm=PSOOptions(particles=4, iterations=2)) runs 4 x 2",
+        "swarm",
         honoured,
         group="plan",
         check=True,
     )
-    sim_kw = dict(
-        seeds="auto",
-        validate_realizations=0,
-        progress=False,
-        rng=0,
-        particles=2,
-        iterations=1,
-        nodes=NODES,
-    )
-    for v in [{"start": 1}, {"starts": -1}, {"spacing": 0}, {"realizations": 0}, "starts"]:
+    for v in [{"start": 1}, {"starts": -1}, {"spacing": 0}, "starts"]:
         api(
             "options",
             f"seed_then_pso(search={v!r})",
-            "search" if isinstance(v, str) else next(iter(v)),
-            lambda v=v: seed_then_pso(ROOM, 4, search=v, **sim_kw),
+            "search",
+            lambda v=v: seed_then_pso(ROOM, 4, **{**PLAN_KW, "cost": "variance", "search": v}),
+            group="plan",
+        )
+    for v in [{"start": 1}, {"spacing": 0}]:
+        api(
+            "options",
+            f"SearchOptions(**{v!r})",
+            next(iter(v)) if "start" not in v else "start",
+            lambda v=v: placement.SearchOptions(**v),
             group="plan",
         )
 
@@ -343,13 +343,13 @@ def _failed_result_cases() -> None:
         "initial",
         lambda: pso(peb_cost, ROOM, 4, options=FAST, initial=np.zeros((2, 5, 3))),
     )
-    for arg, v in (("sigma", 0), ("sigma", -1), ("sigma", "x")):
+    for v in (0, -1, "x"):
         api(
             "failed-result",
-            f"seed_then_pso(cost='peb', {arg}={v!r})",
-            arg,
-            lambda a=arg, v=v: seed_then_pso(
-                ROOM, 4, particles=3, iterations=1, **{**PLAN_KW, a: v}
+            f"seed_then_pso(cost=PEBCost(room, sigma={v!r}))",
+            "sigma",
+            lambda v=v: seed_then_pso(
+                ROOM, 4, **{**PLAN_KW, "cost": placement.PEBCost(ROOM, sigma=v)}
             ),
             group="plan",
         )
@@ -519,13 +519,7 @@ def _bound_and_projection_cases() -> None:
         res = seed_then_pso(
             narrow,
             4,
-            cost="peb",
-            seeds=None,
-            particles=4,
-            iterations=2,
-            validate_realizations=0,
-            progress=False,
-            rng=0,
+            **{**PLAN_KW, "swarm": PSOOptions(particles=4, iterations=2)},
         )
         from simulation.checks import geometry
 
@@ -843,8 +837,8 @@ def _empty_input_cases() -> None:
          lambda: refine_on_table(ROOM, table(), [np.zeros((0, 3))])),
         ("simulated_select(workers 0)", "workers",
          lambda: simulated_select(ROOM, 4, options=tiny, table=table(), workers=0)),
-        ("seed_then_pso(seeds of 6 anchors, M 4)", "seeds",
-         lambda: seed_then_pso(ROOM, 4, **{**PLAN_KW, "seeds": np.zeros((2, 6, 3)) + 1})),
+        ("seed_then_pso(initial of 6 anchors, M 4)", "initial",
+         lambda: seed_then_pso(ROOM, 4, **{**PLAN_KW, "initial": np.zeros((2, 6, 3)) + 1})),
         ("pso(initial of 6 anchors, M 4)", "initial",
          lambda: pso(peb_cost, ROOM, 4, initial=np.zeros((1, 6, 3)) + 1)),
         *[(f"validate_layout(mount_tolerance {v!r})", "mount_tolerance",

@@ -30,9 +30,10 @@ import numpy as np
 from _common import emit, read_lines, runs_parser, spread
 
 from placement.costs import DrawsCost
-from placement.plan import build_table, stream
+from placement.initial import build_table
 from placement.rangetable import node_draws
 from placement.simselect import SearchOptions, refine_on_table, simulated_select
+from placement.streams import phase_seed
 from placement.validation import validate_layout
 from placement.workers import WorkerPool, run_calls
 from simulation import Room
@@ -43,14 +44,14 @@ def _candidates(room, M, seed, keep, ex, workers):
     opt = SearchOptions()
     table = build_table(room, opt, None, seed, ex)
     sel = simulated_select(
-        room, M, options=opt, table=table, rng=stream(seed, "search"), executor=ex,
+        room, M, options=opt, table=table, rng=phase_seed(seed, "search"), executor=ex,
         workers=workers,
     )  # fmt: skip
     layouts = sel.layouts(keep)
     costs = [c for _, c in sel.optima[: len(layouts)]]
     out = [(f"search-{k + 1}", a, c) for k, (a, c) in enumerate(zip(layouts, costs, strict=True))]
     refined, _, _ = refine_on_table(
-        room, table, layouts[:2], options=opt, rng=stream(seed, "refinement"), executor=ex,
+        room, table, layouts[:2], options=opt, rng=phase_seed(seed, "refinement"), executor=ex,
         workers=workers,
     )  # fmt: skip
     out += [(f"refined-{k + 1}", a, f) for k, (a, f, _) in enumerate(refined)]
@@ -60,9 +61,9 @@ def _candidates(room, M, seed, keep, ex, workers):
 def _fresh_moments(room, anchors, seed, draws):
     """(2, draws) mean and mean square of the errors (m, m²) on each fresh draw."""
     exact = draws // 2
-    sets = node_draws(room, room.grid(), draws, exact, stream(seed, "finalist_nodes"))
+    sets = node_draws(room, room.grid(), draws, exact, phase_seed(seed, "finalist_nodes"))
     cost = DrawsCost(
-        room, sets, exact_draws=exact, mount_tolerance=0.03, seed=stream(seed, "finalists")
+        room, sets, exact_draws=exact, mount_tolerance=0.03, seed=phase_seed(seed, "finalists")
     )
     e = cost.errors(anchors).reshape(draws, -1)
     return np.stack([e.mean(axis=1), (e**2).mean(axis=1)])
@@ -71,7 +72,7 @@ def _fresh_moments(room, anchors, seed, draws):
 def validation_figures(room, anchors, seed) -> dict:
     """σ and P95 at the 270 nodes, held-out and mounting-error σ of a layout validated as
     ``seed_then_pso(..., rng=seed)`` validates its answer."""
-    v = validate_layout(room, anchors, rng=stream(seed, "validation"), mount_tolerance=0.03)
+    v = validate_layout(room, anchors, rng=phase_seed(seed, "validation"), mount_tolerance=0.03)
     return {
         "std": v["std"],
         "p95": v["p95"],

@@ -51,8 +51,7 @@ def main() -> None:
             continue
         t0 = time.perf_counter()
         with ProcessPoolExecutor(args.workers) as ex:
-            res = seed_then_pso(room, args.anchors, rng=args.seed, executor=ex,
-                                workers=args.workers, progress=False)  # fmt: skip
+            res = seed_then_pso(room, args.anchors, rng=args.seed, executor=ex, progress=False)
         seconds = time.perf_counter() - t0
         v = res.validation
         emit(

@@ -7,7 +7,7 @@ a. Four anchors, corners versus optimized (paper §V-A): σ / mean / P95 of the 
    error and mean DOP over ``--corner-realizations`` (paper: R = 500) for the corners layout,
    the paper-settings PSO layout and the ``seed_then_pso`` layout at M = 4; DOP-difference
    maps, error CDFs (Euclidean, |x|, |y|, |z|) and the PSO evolution (PEB at t = 1, mid, end).
-b. Table I (paper §V-B): for each M, paper-settings PSO (``seeds=None``: 15 particles,
+b. Table I (paper §V-B): for each M, paper-settings PSO (``initial=None``: 15 particles,
    area-proportional random start, ≤ ``--iterations``, stop on small improvement, on the
    default cost) and ``seed_then_pso`` with its defaults (or its runs saved by
    bench_pso.py, ``--stp-from``), validated with ``--realizations`` (≥ 100): σ, mean,
@@ -59,6 +59,7 @@ from placement.plan import seed_then_pso  # noqa: E402
 from placement.pso import PSOOptions, evaluate_swarm  # noqa: E402
 from placement.serialization import to_jsonable  # noqa: E402
 from placement.surfaces import random_layout  # noqa: E402
+from placement.validation import ValidationOptions  # noqa: E402
 from simulation import Room, evaluate_layout  # noqa: E402
 
 SIGMA_R = 0.04  # m, range σ of the PEB (the library default, paper §V-A: 0.03-0.045 m)
@@ -191,16 +192,15 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
     t0 = time.perf_counter()
     # "pso": the paper's unseeded swarm (on the default cost's common draws); "stp":
     # seed_then_pso with its defaults
-    swarm = {"seeds": None, "options": options} if method == "pso" else {}
+    swarm = {"initial": None, "swarm": options} if method == "pso" else {}
     res = seed_then_pso(
         room,
         M,
         cost="variance",
         executor=executor,
-        workers=args.workers,
         rng=seed,
         progress=False,
-        validate_realizations=0,
+        validation=ValidationOptions(realizations=0),
         checkpoint=ckpt,
         **swarm,
     )
@@ -229,7 +229,9 @@ def run_pso(room, M, seed, method, args, executor, ckpt_dir) -> dict:
         "pso_elapsed": p.elapsed,
         "seconds_per_iteration": p.elapsed / max(res.nit, 1),
         "seconds_per_evaluation": p.elapsed / max(res.nfev, 1),
-        "seeds": [{"name": s.name, "mean_peb_m": s.mean_peb, "cost": s.cost} for s in res.seeds],
+        "initial": [
+            {"name": s.name, "mean_peb_m": s.mean_peb, "cost": s.cost} for s in res.initial
+        ],
         "resumed_from_checkpoint": bool(ckpt is not None and p.elapsed > seconds + 1.0),
     }
 

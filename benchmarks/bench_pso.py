@@ -31,8 +31,9 @@ import numpy as np
 from _common import emit
 
 from placement import PSOOptions
-from placement.plan import seed_then_pso, stream
+from placement.plan import seed_then_pso
 from placement.serialization import to_jsonable
+from placement.streams import phase_seed
 from placement.validation import validate_layout
 from placement.workers import WorkerPool
 from simulation import Room
@@ -51,15 +52,15 @@ def _summary(v: dict) -> dict:
 
 def _validation_rng(res) -> int:
     """The validation stream of a run (as seed_then_pso derives it)."""
-    return stream(res.settings["seed"], "validation")
+    return phase_seed(res.settings["seed"], "validation")
 
 
 def run(room, M, seed, args, ex, unseeded=False) -> dict:
     t0 = time.perf_counter()
     kw = {}
     if unseeded:
-        kw = dict(seeds=None, options=PSOOptions(particles=15, iterations=40, tol=0.0))
-    res = seed_then_pso(room, M, rng=seed, executor=ex, workers=args.workers, progress=False, **kw)
+        kw = dict(initial=None, swarm=PSOOptions(particles=15, iterations=40, tol=0.0))
+    res = seed_then_pso(room, M, rng=seed, executor=ex, progress=False, **kw)
     seconds = time.perf_counter() - t0
     out = {
         "M": M,
@@ -71,19 +72,19 @@ def run(room, M, seed, args, ex, unseeded=False) -> dict:
         "nit": res.nit,
         "history": res.history,
         "validation": _summary(res.validation),
-        "seeds": [s.to_dict() for s in res.seeds],
+        "initial": [s.to_dict() for s in res.initial],
         "finalists": [{k: f[k] for k in ("source", "pso_cost", "cost")} for f in res.finalists],
         "chosen": next(
             (f["source"] for f in res.finalists if np.array_equal(f["anchors"], res.anchors)),
             "swarm",
         ),
-        "seed_search": {k: v for k, v in res.settings.get("seed_search", {}).items()},
+        "search_result": dict(res.settings.get("search_result", {})),
         "timings": res.timings,
         "nfev_by_phase": res.settings["nfev_by_phase"],
         "seconds": seconds,
     }
-    if res.seeds:
-        best = min(res.seeds, key=lambda s: s.cost)
+    if res.initial:
+        best = min(res.initial, key=lambda s: s.cost)
         v = validate_layout(room, best.anchors, rng=_validation_rng(res), executor=ex)
         out["best_seed"] = {"name": best.name, "anchors": best.anchors.tolist(), **_summary(v)}
     return out
@@ -94,7 +95,7 @@ def baseline(room, M, seed, folder: Path, ex) -> dict | None:
     if not path.exists():
         return None
     anchors = np.array(json.loads(path.read_text())["anchors"])
-    rng = stream(seed, "validation")
+    rng = phase_seed(seed, "validation")
     v = validate_layout(room, anchors, rng=rng, executor=ex)
     return {"source": str(path), "anchors": anchors.tolist(), **_summary(v)}
 

@@ -79,9 +79,7 @@ def plans(workers: int) -> None:
                 8,
                 rng=0,
                 executor=pool,
-                workers=workers,
                 progress=False,
-                validate_realizations=100,
             )  # as `anchorplan plan`
             seconds[label] = time.perf_counter() - t0
         emit("receiver_plan", design=label, seconds=seconds[label], workers=workers,

@@ -30,7 +30,7 @@ from _common import emit
 
 import analysis
 from placement import naive_layout
-from placement.plan import stream
+from placement.streams import phase_seed
 from placement.validation import validate_layout
 from simulation import Room
 from simulation.polyhedral import line_of_sight
@@ -83,7 +83,7 @@ def main() -> None:
     nodes = room.grid()
     with ProcessPoolExecutor(args.workers) as ex:
         for name, a in layouts.items():
-            v = validate_layout(room, a, rng=stream(seed, "validation"), mount_tolerance=tol,
+            v = validate_layout(room, a, rng=phase_seed(seed, "validation"), mount_tolerance=tol,
                                 executor=ex)  # fmt: skip
             errors = np.asarray(v["errors"], dtype=float)
             emit(

@@ -35,7 +35,8 @@ import time
 import numpy as np
 from _common import PAPER_TABLE1, emit, read_lines, runs_parser, spread
 
-from placement.plan import build_table, seed_then_pso
+from placement.initial import build_table
+from placement.plan import Planner
 from placement.simselect import SearchOptions
 from placement.workers import WorkerPool
 from simulation import Room
@@ -43,10 +44,9 @@ from simulation import Room
 
 def run(room, M, seed, table, options, ex, workers, cost="variance") -> dict:
     t0 = time.perf_counter()
-    res = seed_then_pso(
-        room, M, rng=seed, cost=cost, search=options, table=table, executor=ex,
-        workers=workers, progress=False,
-    )  # fmt: skip
+    planner = Planner(room, M, rng=seed, cost=cost, search=options, executor=ex,
+                      progress=False, table=table)  # fmt: skip
+    res = planner.solve()
     v = res.validation
     return dict(
         M=M,

@@ -6,7 +6,10 @@ The top layer: imports :mod:`analysis` and :mod:`simulation`, never the reverse.
 from placement.anchor_sweep import SweepResult, sweep
 from placement.costs import DrawsCost, PEBCost, SimulatedCost, make_cost
 from placement.exhaustive import ExhaustiveResult, exhaustive_search
-from placement.plan import PlacementResult, SeedLayout, seed_then_pso
+from placement.finalists import FinalistOptions
+from placement.initial import InitialLayout
+from placement.plan import Planner, seed_then_pso
+from placement.plan_result import PlacementResult
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.refine import RefineResult, refine_peb
 from placement.relaxation import Selection, relax_select
@@ -42,7 +45,9 @@ __all__ = [
     "PSOOptions",
     "PSOResult",
     "PlacementResult",
-    "SeedLayout",
+    "InitialLayout",
+    "FinalistOptions",
+    "Planner",
     "SimulatedCost",
     "make_cost",
     "pso",

@@ -135,20 +135,30 @@ def sweep(
     target_p95: float | None = None,
     target_availability: float = 0.99,
     on_row=None,
-    **seed_then_pso_kwargs,
+    cost="variance",
+    initial="auto",
+    search=None,
+    swarm=None,
+    finalists=None,
+    validation=None,
+    nodes=None,
+    rng=0,
+    executor=None,
+    progress: bool = True,
 ) -> SweepResult:
-    """Plan each anchor count in ``anchors`` with :func:`placement.seed_then_pso` (its
-    keyword arguments pass through; every M uses the same ``rng``) on one shared range
-    table, and recommend the smallest M whose validated availability reaches
-    ``target_availability`` (a share in (0, 1]) and whose validated P95 (m) ≤
-    ``target_p95`` (when given).
+    """Plan each anchor count in ``anchors`` with :func:`placement.seed_then_pso` (the
+    keywords from ``cost`` on are its own; every M uses the same ``rng``) on one shared
+    range table, built as a plan builds it, so that the row for M is the plan
+    ``seed_then_pso(room, M, ...)``; and recommend the smallest M whose validated
+    availability reaches ``target_availability`` (a share in (0, 1]) and whose validated
+    P95 (m) ≤ ``target_p95`` (when given).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
-    on_row : an optional callable ``on_row(M, row)`` called after each M (``progress``
-        passes through to :func:`placement.seed_then_pso`, as its other keywords).
+    on_row : an optional callable ``on_row(M, row)`` called after each M.
     """
-    from placement.plan import _search_options, seed_then_pso
-    from placement.simselect import search_table
+    from placement.initial import build_table
+    from placement.plan import Planner
+    from placement.simselect import SearchOptions
     from placement.surfaces import candidate_grid
 
     room = room_or_default(room)
@@ -160,38 +170,38 @@ def sweep(
     target_availability = checks.real(
         "target_availability", target_availability, low=0.0, high=1.0, low_open=True
     )
-    kw = dict(seed_then_pso_kwargs)
-    if "table" in kw:
-        raise ValueError("table: sweep builds the shared table itself; do not pass one")
+    kw = {"cost": cost, "initial": initial, "search": search, "swarm": swarm,
+          "finalists": finalists, "validation": validation, "nodes": nodes,
+          "executor": executor, "progress": progress}  # fmt: skip
+    seed = checks.entropy("rng", rng)
+    planners = [Planner(room, M, rng=seed, **kw) for M in counts]  # every argument checked
+    first = planners[0]
     t0 = time.perf_counter()
-    search = _search_options(kw.pop("search", None), kw.pop("mount_tolerance", None))
-    entropy = checks.entropy("rng", kw.pop("rng", 0))
     table = None
-    if (
-        kw.get("cost", "variance") in ("variance", "mean", "p95", "rms")
-        and kw.get("seeds", "auto") == "auto"
-    ):
-        n = len(candidate_grid(room, search.spacing_for(room)))
+    if first.simulated and isinstance(first.initial, str):
+        opt = first.search if search is not None else SearchOptions()
+        n = len(candidate_grid(room, opt.spacing_for(room)))
         if n < max(counts):
             raise ValueError(
                 f"anchors: {max(counts)} anchors exceed the {n} candidate points "
-                f"(spacing {search.spacing_for(room):g} m) of this room"
+                f"(spacing {opt.spacing_for(room):g} m) of this room"
             )
-        table = search_table(room, search, kw.get("nodes"), entropy, kw.get("executor"))
+        table = build_table(room, opt, first.nodes, seed, executor, progress)
     t_table = time.perf_counter() - t0
     rows = []
-    for M in counts:
+    for planner in planners:
         t = time.perf_counter()
-        res = seed_then_pso(room, M, search=search, rng=entropy, table=table, **kw)
-        rows.append(_row(M, res, time.perf_counter() - t))
+        planner.table = table
+        res = planner.solve()
+        rows.append(_row(planner.M, res, time.perf_counter() - t))
         if on_row is not None:
-            on_row(M, rows[-1])
+            on_row(planner.M, rows[-1])
     return SweepResult(
         rows=tuple(rows),
         recommended=recommend(rows, target_p95, target_availability),
         target_p95=target_p95,
         room=room,
-        settings={"anchors": counts, "rng": entropy, "search": search.__dict__},
+        settings={"anchors": counts, "rng": seed, "search": first.search.__dict__},
         timings={"table": t_table, "total": time.perf_counter() - t0},
         target_availability=target_availability,
     )

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from analysis.fim import peb
+from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
 from placement.rangetable import check_mount_tolerance, range_table, table_errors
 from simulation import checks
 from simulation.room import Room, as_room
@@ -129,11 +129,11 @@ class PEBCost:
     """
 
     room: Room = field(default_factory=Room.techtile)
-    sigma: float = 0.04
+    sigma: float = DEFAULT_SIGMA
     nodes: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        checks.real("sigma", self.sigma, low=0.0, high=10.0, low_open=True, unit="m")
+        check_sigma(self.sigma)
         room = as_room(self.room)
         if self.nodes is not None:
             room.check_nodes(self.nodes)
@@ -165,7 +165,12 @@ def _takes_rng(fn: Callable) -> bool:
 
 
 def make_cost(
-    cost: str | Callable, room: Room, *, realizations: int = 1, nodes=None, sigma: float = 0.04
+    cost: str | Callable,
+    room: Room,
+    *,
+    realizations: int = 1,
+    nodes=None,
+    sigma: float = DEFAULT_SIGMA,
 ) -> Callable[[np.ndarray, np.random.Generator], float]:
     """Turn a cost name or callable into a ``cost(anchors, rng) -> float`` object.
 
@@ -178,12 +183,18 @@ def make_cost(
     if isinstance(cost, str):
         if cost == "peb":
             return PEBCost(room, sigma=sigma, nodes=nodes)
-        if cost in SIMULATED_STATISTICS:
+        if is_simulated(cost):
             return SimulatedCost(room, cost, realizations=realizations, nodes=nodes)
         raise ValueError(f"cost: unknown name {cost!r}; allowed: {list(COST_NAMES)} or a callable")
     if callable(cost):
         return CallableCost(cost, getattr(cost, "__name__", "callable"))
     raise ValueError(f"cost: expected a name in {list(COST_NAMES)} or a callable, got {cost!r}")
+
+
+def is_simulated(cost) -> bool:
+    """Whether ``cost`` is a simulated cost by name ("variance", "mean", "p95", "rms"):
+    the planner then searches a range table and scores the swarm on scene draws."""
+    return isinstance(cost, str) and cost in SIMULATED_STATISTICS
 
 
 def cost_name(cost) -> str:

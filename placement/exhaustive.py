@@ -23,6 +23,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from analysis.fim import DEFAULT_SIGMA
 from placement.result import LayoutResult
 from placement.selection import DEFAULT_SPACING, criterion_values, design_inputs
 from simulation import checks
@@ -69,7 +70,7 @@ def exhaustive_search(
     *,
     candidates=None,
     criterion: str = "A",
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     nodes=None,
     top_k: int = 1,
     max_subsets: int = 10_000_000,

@@ -15,8 +15,6 @@ the same result serially, on a process pool, on Dask, and after a resume.
 
 from __future__ import annotations
 
-import contextlib
-import contextvars
 import inspect
 import json
 import logging
@@ -57,24 +55,6 @@ class EvaluationTimeout(Exception):
     """An evaluation of the cost exceeded ``eval_timeout``."""
 
 
-_EVAL_TIMEOUT: contextvars.ContextVar[float | None] = contextvars.ContextVar(
-    "eval_timeout", default=None
-)
-
-
-@contextlib.contextmanager
-def default_eval_timeout(seconds: float | None):
-    """Within the block, :func:`pso` calls that pass no ``eval_timeout`` use ``seconds``
-    (for callers, such as ``seed_then_pso``, that do not pass it through)."""
-    if seconds is not None:
-        seconds = checks.real("eval_timeout", seconds, low=0.0, low_open=True, unit="s")
-    token = _EVAL_TIMEOUT.set(seconds)
-    try:
-        yield
-    finally:
-        _EVAL_TIMEOUT.reset(token)
-
-
 #: upper limits of the swarm's size and length
 MAX_PARTICLES, MAX_ITERATIONS = 10_000, 100_000
 
@@ -95,7 +75,8 @@ class PSOOptions:
         in rare steps, hence a long default patience.
 
     Allowed: particles 2–10⁴, iterations 1–10⁵, inertia [0, 1], cognitive and social
-    [0, 4], velocity_clamp (0, 1], init_velocity and tol [0, 1], patience ≥ 1.
+    [0, 4], velocity_clamp (0, 1], init_velocity and tol [0, 1], patience ≥ 1,
+    eval_timeout > 0 s or None.
     """
 
     particles: int = 15
@@ -108,6 +89,7 @@ class PSOOptions:
     tol: float = 1e-3
     patience: int = 20
     init_spread: float = 0.0
+    eval_timeout: float | None = None
 
     def __post_init__(self) -> None:
         checks.count("particles", self.particles, low=2, high=MAX_PARTICLES)
@@ -118,6 +100,8 @@ class PSOOptions:
         checks.real("velocity_clamp", self.velocity_clamp, low=0.0, high=1.0, low_open=True)
         checks.count("patience", self.patience, low=1)
         checks.real("init_spread", self.init_spread, low=0.0, unit="m")
+        if self.eval_timeout is not None:
+            checks.real("eval_timeout", self.eval_timeout, low=0.0, low_open=True, unit="s")
 
 
 #: status codes of :class:`PSOResult`
@@ -414,7 +398,7 @@ def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed,
         {
             "room": room.to_dict(),
             "M": M,
-            "options": asdict(options),
+            "options": {k: v for k, v in asdict(options).items() if k != "eval_timeout"},
             "cost": cost_label,
             "seed": seed,
             "initial": None if initial is None else np.asarray(initial).tolist(),
@@ -614,14 +598,11 @@ def pso(
     callback: Callable[[PSOResult], bool | None] | None = None,
     checkpoint: str | os.PathLike | None = None,
     cost_label: str | None = None,
-    eval_timeout: float | None = None,
-    seed=checks.UNSET,
 ) -> PSOResult:
     """Minimize ``cost(anchors, rng)`` over layouts of M anchors on the mounting surfaces.
 
     rng : an int (reproducible; resuming from a checkpoint needs one), a numpy
-        ``Generator`` (drawn once for the run's seed) or None; ``seed=`` is its deprecated
-        alias.
+        ``Generator`` (drawn once for the run's seed) or None.
     initial : (S, M, 3) seed layouts placed first in the swarm (projected onto the
         surfaces), S ≤ particles; the other particles are area-proportional random layouts.
     executor : any ``concurrent.futures.Executor`` (process pool, Dask's
@@ -632,19 +613,14 @@ def pso(
         was written by a run with the same arguments, the run resumes from it and ends
         with exactly the result of an uninterrupted run (``extra["resumed_from"]``: the
         iteration it resumed after). A damaged checkpoint raises ``ValueError``.
-    eval_timeout : seconds one evaluation may take; a longer one costs inf (counted in
-        ``failures`` and ``extra["timeouts"]``). Enforced with SIGALRM in the process that
-        evaluates (serial runs in the main thread, process pools); a worker that ignores
-        it is killed when the executor is a :class:`~placement.WorkerPool`.
-
     Evaluations lost to a dead worker process of a :class:`~placement.WorkerPool` cost
     inf (``failures``, ``extra["lost"]``); a plain ``ProcessPoolExecutor`` cannot survive
     that and :class:`ExecutorBroken` is raised, the checkpoint holding the last iteration.
     """
     room = as_room(room)
     args = _check_args(
-        room, M, cost, options, initial, executor, chunksize, rng, seed, progress, callback,
-        cost_label, eval_timeout, checkpoint,
+        room, M, cost, options, initial, executor, chunksize, rng, progress, callback,
+        cost_label, checkpoint,
     )  # fmt: skip
     swarm, resumed_from = _resume(args["ckpt"], args["fingerprint"])
     t0 = time.perf_counter()
@@ -680,8 +656,8 @@ def pso(
 
 
 def _check_args(
-    room, M, cost, options, initial, executor, chunksize, rng, seed, progress, callback,
-    cost_label, eval_timeout, checkpoint,
+    room, M, cost, options, initial, executor, chunksize, rng, progress, callback,
+    cost_label, checkpoint,
 ) -> dict[str, Any]:  # fmt: skip
     """Every argument of :func:`pso` checked; returns them resolved (and the fingerprint
     of the run, which a checkpoint must match)."""
@@ -700,14 +676,13 @@ def _check_args(
     cost = _check_cost(cost, executor)
     if chunksize is not None:
         chunksize = checks.count("chunksize", chunksize, low=1)
-    rng = checks.rng_or_seed(rng, seed, owner="pso")
     seed = None if rng is None else checks.entropy("rng", rng)
     progress = checks.flag("progress", progress)
     if callback is not None and not callable(callback):
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
     if cost_label is not None and not isinstance(cost_label, str):
         raise ValueError(f"cost_label: must be a string or None, got {checks.describe(cost_label)}")
-    eval_timeout = _check_timeout(eval_timeout, executor)
+    eval_timeout = _check_timeout(options.eval_timeout, executor)
     initial = _check_initial(initial, M, options.particles)
     label = cost_label or getattr(cost, "statistic", None) or type(cost).__name__
     return {
@@ -727,10 +702,7 @@ def _check_args(
 
 
 def _check_timeout(eval_timeout, executor) -> float | None:
-    if eval_timeout is None:
-        eval_timeout = _EVAL_TIMEOUT.get()
     if eval_timeout is not None:
-        eval_timeout = checks.real("eval_timeout", eval_timeout, low=0.0, low_open=True, unit="s")
         if executor is None and not _can_alarm():
             raise ValueError(
                 "eval_timeout: without an executor it needs the main thread (SIGALRM); "

@@ -40,7 +40,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from analysis.fim import peb
+from analysis.fim import DEFAULT_SIGMA, peb
 from placement.result import LayoutResult
 from placement.surfaces import allowed, allowed_rectangles, from_uv, mounting_surfaces, to_uv
 from simulation import checks
@@ -301,7 +301,7 @@ def refine_peb(
     room: Room,
     anchors,
     *,
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     objective: str = "mean",
     nodes=None,
     multistart: int = 0,

@@ -53,6 +53,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from analysis.fim import DEFAULT_SIGMA
 from placement.result import LayoutResult
 from placement.selection import (
     DEFAULT_SPACING,
@@ -421,14 +422,13 @@ def relax_select(
     *,
     candidates=None,
     criterion: str = "A",
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     nodes=None,
     rng=None,
     spacing: float = DEFAULT_SPACING,
     samples: int = 64,
     starts: int = 8,
     solver_opts: dict | None = None,
-    seed=checks.UNSET,
 ) -> Selection:
     """Choose M of N candidate mounting points by convex relaxation + rounding.
 
@@ -443,7 +443,7 @@ def relax_select(
         candidate (P, N) (e.g. :class:`analysis.MultipathRangeNoise`).
     nodes : (P, 3) evaluation nodes (m); default ``room.grid()`` (270 nodes).
     rng : an int seed, a ``numpy.random.Generator`` or None (fresh entropy) for the
-        rounding. ``seed`` is its deprecated name.
+        rounding.
     samples, starts : subsets drawn ∝ weights; how many of the best get local search.
     solver_opts : extra keyword arguments for Clarabel (through ``cvxpy.Problem.solve``).
 
@@ -462,8 +462,7 @@ def relax_select(
     if solver_opts is not None:
         checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
         checks.known_keys("solver_opts", solver_opts, _solver_keys())
-    name = "rng" if seed is checks.UNSET else "seed"
-    rng = checks.rng(name, checks.rng_or_seed(rng, seed, owner="relax_select"))
+    rng = checks.rng("rng", rng)
     G = inp.table()
     N, M = G.shape[1], inp.M
     wv, lam, solver_status, solver_value, compile_time, solve_time, info = _solve(

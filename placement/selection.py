@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from analysis.fim import minors_det, nonsingular
+from analysis.fim import DEFAULT_SIGMA, minors_det, nonsingular
 from placement.surfaces import allowed, candidate_grid
 from simulation import checks
 from simulation.room import Room, as_room
@@ -77,7 +77,7 @@ def design_inputs(
     M,
     candidates=None,
     criterion: str = "A",
-    sigma=0.04,
+    sigma=DEFAULT_SIGMA,
     nodes=None,
     spacing: float = DEFAULT_SPACING,
 ) -> DesignInputs:

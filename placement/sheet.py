@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from placement.sheet_html import render
 from placement.surfaces import mounting_surfaces, surface_index
 from simulation import checks
 from simulation.directivity import aim_vectors
@@ -240,14 +241,12 @@ def write_sheet(out_dir, room: Room, anchors, *, tolerance: float | None = None,
     """Write ``anchors.csv`` and the printable ``sheet.html`` (:mod:`placement.sheet_html`)
     of the layout ``anchors`` (M, 3) m in ``room`` to the folder ``out_dir`` (created);
     the paths written, by name."""
-    from placement.sheet_html import render
-
     room = as_room(room)
     rows = mounts(room, anchors, tolerance)
     out = checks.output_path("out_dir", out_dir, kind="dir")
     out.mkdir(parents=True, exist_ok=True)
     paths = {"csv": write_csv(out / "anchors.csv", rows)}
-    html = render(room, rows, title=title or f"Mounting sheet: {room.name}")
+    html = render(room, rows, vertical_frames(room), title=title or f"Mounting sheet: {room.name}")
     (out / "sheet.html").write_text(html)
     paths["html"] = out / "sheet.html"
     return paths

@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import html
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from placement.sheet import Mount, VerticalFrame, vertical_frames
 from simulation.room import Room
+
+if TYPE_CHECKING:  # the sheet's data (placement.sheet) imports this module to render
+    from placement.sheet import Mount, VerticalFrame
 
 #: table rows per printed page
 ROWS_PER_PAGE = 25
@@ -287,9 +289,9 @@ def _page(title: str, sub: str, body: str) -> str:
     return f'<section class="page"><h2>{_e(title)}</h2><p class="sub">{_e(sub)}</p>{body}</section>'
 
 
-def render(room: Room, rows: list[Mount], *, title: str) -> str:
-    """The sheet's HTML (module docstring) for the mounts ``rows`` in ``room``."""
-    frames = vertical_frames(room)
+def render(room: Room, rows: list[Mount], frames: dict[str, VerticalFrame], *, title: str) -> str:
+    """The sheet's HTML (module docstring) for the mounts ``rows`` in ``room``, whose
+    vertical surfaces are ``frames`` (by name)."""
     on_wall = {}
     for r in rows:
         if r.kind == "wall":

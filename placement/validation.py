@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.fim import peb
+from analysis.fim import DEFAULT_SIGMA, peb
 from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks
@@ -142,7 +142,7 @@ def validate_layout(
     options: ValidationOptions | None = None,
     mount_tolerance: float = 0.03,
     nodes=None,
-    sigma: float = 0.04,
+    sigma: float = DEFAULT_SIGMA,
     executor: Executor | None = None,
     progress=None,
 ) -> dict[str, Any]:

@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -45,8 +44,6 @@ __all__ = [
     "real",
     "reals",
     "rng",
-    "rng_or_seed",
-    "seed",
     "stream",
     "substream",
 ]
@@ -191,18 +188,6 @@ def choice(name: str, value: Any, allowed: Iterable[Any]) -> Any:
     raise ValueError(f"{name}: must be one of {options}, got {describe(value)}")
 
 
-def seed(name: str, value: Any) -> int | None:
-    """A random seed: None or an integer >= 0."""
-    if value is None:
-        return None
-    try:
-        return count(name, value, low=0)
-    except ValueError:
-        raise ValueError(
-            f"{name}: must be None or an integer >= 0, got {describe(value)}"
-        ) from None
-
-
 def rng(name: str, value: Any) -> np.random.Generator:
     """A numpy ``Generator`` from a Generator, BitGenerator, SeedSequence, a seed (int >= 0)
     or None (fresh entropy), as :func:`numpy.random.default_rng` would; else ValueError."""
@@ -243,43 +228,6 @@ def entropy(name: str, value: Any) -> int:
     if value is None:
         return int(np.random.SeedSequence().entropy % 2**63)
     return int(rng(name, value).integers(2**63))
-
-
-class _Unset:
-    """The default of a deprecated keyword: "not given"."""
-
-    def __repr__(self) -> str:
-        return "<unset>"
-
-
-#: the default of the deprecated ``seed=`` keywords (see :func:`rng_or_seed`)
-UNSET: Any = _Unset()
-
-
-def rng_or_seed(rng_value: Any, seed_value: Any, *, owner: str, rng_default: Any = None) -> Any:
-    """The ``rng`` argument of ``owner``, honouring its deprecated alias ``seed``.
-
-    ``seed_value`` is :data:`UNSET` when not given. Given both (``rng`` other than its
-    default ``rng_default``) is a ``ValueError``; ``seed`` alone warns
-    (``DeprecationWarning``) and is used as ``rng``.
-    """
-    if seed_value is UNSET:
-        return rng_value
-    if not (rng_value is rng_default or _same(rng_value, rng_default)):
-        raise ValueError(f"seed: {owner} got both rng and its deprecated alias seed; use rng")
-    warnings.warn(
-        f"{owner}(seed=...) is deprecated; use rng=... (an int seed, a numpy Generator or None)",
-        DeprecationWarning,
-        stacklevel=3,
-    )
-    return seed_value
-
-
-def _same(a: Any, b: Any) -> bool:
-    try:
-        return bool(type(a) is type(b) and a == b)
-    except (TypeError, ValueError):
-        return False
 
 
 # -- collections ------------------------------------------------------------------------------

@@ -389,7 +389,6 @@ def evaluate_layout(
     chunk: int | None = None,
     precision: str = DEFAULT_PRECISION,
     workers: int | None = None,
-    seed=checks.UNSET,
 ) -> Evaluation:
     """Simulate ``realizations`` noisy range sets for every node and locate the nodes.
 
@@ -407,16 +406,13 @@ def evaluate_layout(
 
     ``rng`` (an int seed, default 0; a numpy ``Generator``, drawn once; or None, fresh
     entropy) gives the integer seed s of the noise streams (see the module docstring),
-    kept as ``Evaluation.seed``: ``rng=ev.seed`` reproduces ``ev``. ``seed`` is the
-    deprecated name of ``rng``.
+    kept as ``Evaluation.seed``: ``rng=ev.seed`` reproduces ``ev``.
     """
     room = as_room(room)
     anchors = room.check_anchors(checks.reals("anchors", anchors))
     checks.distinct("anchors", anchors)
     realizations = checks.count("realizations", realizations, low=1)
-    name = "rng" if seed is checks.UNSET else "seed"
-    rng = checks.rng_or_seed(rng, seed, owner="evaluate_layout", rng_default=0)
-    seed = checks.entropy(name, rng)
+    seed = checks.entropy("rng", rng)
     noise = checks.flag("noise", noise)
     bounded = checks.flag("bounded", bounded)
     max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)

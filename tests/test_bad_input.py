@@ -96,11 +96,7 @@ def test_pso_options_counts(field, v):
         (lambda: ROOM.grid((1.5, 2, 2)), "shape"),
         (lambda: image_indices(True), "max_order"),
         (lambda: pso(lambda a, r: 1.0, ROOM, 4.5, options=FAST), "M"),
-        pytest.param(
-            lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, seed=1.7),
-            "seed",
-            marks=pytest.mark.filterwarnings("ignore:pso\\(seed=...\\) is deprecated"),
-        ),
+        (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, rng=1.7), "rng"),
         (lambda: pso(lambda a, r: 1.0, ROOM, 4, options=FAST, chunksize=True), "chunksize"),
         (lambda: Receiver(window=True), "window"),
     ],
@@ -174,7 +170,7 @@ OUTSIDE = [[[9.0, 1.0, 1.0]], [[-0.5, 1.0, 1.0]], [[1.0, 1.0, 3.0]]]
         lambda p: placement.relax_select(ROOM, 4, spacing=1.6, nodes=p),
         lambda p: placement.exhaustive_search(ROOM, 4, spacing=3.0, nodes=p),
         lambda p: placement.refine_peb(ROOM, A, nodes=p),
-        lambda p: placement.seed_then_pso(ROOM, 4, nodes=p, cost="peb", seeds=None, rng=0),
+        lambda p: placement.seed_then_pso(ROOM, 4, nodes=p, cost="peb", initial=None, rng=0),
         lambda p: placement.PEBCost(ROOM, nodes=p),
         lambda p: placement.SimulatedCost(ROOM, nodes=p),
         lambda p: placement.DrawsCost(ROOM, np.asarray(p)[None]),
@@ -538,8 +534,9 @@ def test_repeated_candidates_are_refused_not_returned_as_coincident_anchors():
 def test_a_checkpoint_in_a_new_folder_is_written(tmp_path):
     path = tmp_path / "new" / "sub" / "state.json"
     placement.seed_then_pso(
-        ROOM, 4, cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0,
-        progress=False, rng=0, checkpoint=path, nodes=NODES,
+        ROOM, 4, cost="peb", initial=None, swarm=placement.PSOOptions(particles=3, iterations=1),
+        validation=placement.ValidationOptions(realizations=0), progress=False, rng=0,
+        checkpoint=path, nodes=NODES,
     )  # fmt: skip
     state = json.loads(path.read_text())  # the swarm after its one iteration
     assert state["nfev"] == 3 and len(state["x"]) == 3
@@ -573,7 +570,7 @@ def test_keepouts_and_zones_must_be_lists_of_boxes(items):
 
 
 def test_sweep_checks_on_row_before_planning():
-    kw = dict(cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0)
+    kw = dict(cost="peb", initial=None, swarm=placement.PSOOptions(particles=3, iterations=1))
     refused("on_row", lambda: placement.sweep(ROOM, anchors=[4], on_row="x", **kw), within=2)
 
 

@@ -6,15 +6,17 @@ import numpy as np
 import pytest
 
 import placement
+from placement.finalists import FinalistOptions
 from placement.plan import seed_then_pso
 from placement.pso import PSOOptions
+from placement.validation import ValidationOptions
 from simulation import Room
 from simulation.checks import geometry
 
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]
-TINY = dict(cost="peb", seeds=None, particles=3, iterations=1, validate_realizations=0)
-TINY.update(progress=False, rng=0)
+TINY = dict(cost="peb", initial=None, swarm=PSOOptions(particles=3, iterations=1))
+TINY.update(validation=ValidationOptions(realizations=0), progress=False, rng=0)
 
 
 def refused(name, fn, within=5.0):
@@ -26,43 +28,44 @@ def refused(name, fn, within=5.0):
 
 
 @pytest.mark.parametrize(
-    ("name", "value"),
+    ("name", "make"),
     [
-        ("particles", 3.7),
-        ("particles", True),
-        ("iterations", 1.9),
-        ("iterations", "2"),
-        ("seed", 1.7),
-        ("M", True),
-        ("M", 300),
-        ("finalists", 1.5),
-        ("finalist_draws", 0),
-        ("finalist_exact_draws", -1),
-        ("finalist_exact_draws", 13),
-        ("validate_realizations", -1),
-        ("realizations", True),
-        ("sigma", "0.04"),
+        ("particles", lambda: PSOOptions(particles=3.7)),
+        ("particles", lambda: PSOOptions(particles=True)),
+        ("iterations", lambda: PSOOptions(iterations=1.9)),
+        ("iterations", lambda: PSOOptions(iterations="2")),
+        ("eval_timeout", lambda: PSOOptions(eval_timeout=0)),
+        ("rng", lambda: seed_then_pso(ROOM, 4, **{**TINY, "rng": 1.7})),
+        ("M", lambda: seed_then_pso(ROOM, True, **TINY)),
+        ("M", lambda: seed_then_pso(ROOM, 300, **TINY)),
+        ("count", lambda: FinalistOptions(count=1.5)),
+        ("draws", lambda: FinalistOptions(draws=0)),
+        ("exact_draws", lambda: FinalistOptions(exact_draws=-1)),
+        ("exact_draws", lambda: FinalistOptions(exact_draws=13)),
+        ("realizations", lambda: ValidationOptions(realizations=-1)),
+        ("finalists", lambda: seed_then_pso(ROOM, 4, **{**TINY, "finalists": 1})),
+        ("validation", lambda: seed_then_pso(ROOM, 4, **{**TINY, "validation": 0})),
+        ("callback", lambda: seed_then_pso(ROOM, 4, **{**TINY, "callback": 3})),
     ],
 )
-def test_seed_then_pso_counts_and_numbers(name, value):
-    kw = {"M": 4, **TINY, name: value}
-    refused(name, lambda: seed_then_pso(ROOM, **kw))
+def test_seed_then_pso_counts_and_numbers(name, make):
+    refused(name, make)
 
 
 def test_options_are_honoured_not_overridden_by_the_defaults():
-    kw = {k: v for k, v in TINY.items() if k not in ("particles", "iterations")}
-    res = seed_then_pso(ROOM, 4, options=PSOOptions(particles=4, iterations=2), **kw)
-    assert res.nfev == 8 and res.settings["particles"] == 4
+    kw = {k: v for k, v in TINY.items() if k != "swarm"}
+    res = seed_then_pso(ROOM, 4, swarm=PSOOptions(particles=4, iterations=2), **kw)
+    assert res.nfev == 8 and res.settings["swarm"]["particles"] == 4
 
 
 def test_options_must_be_pso_options():
-    refused("options", lambda: seed_then_pso(ROOM, 4, options={"particles": 4}, **TINY))
+    refused("swarm", lambda: seed_then_pso(ROOM, 4, **{**TINY, "swarm": {"particles": 4}}))
 
 
 @pytest.mark.parametrize(
     ("search", "name"),
     [
-        ({"start": 1}, "start"),
+        ({"start": 1}, "search"),
         ({"chains": -1}, "chains"),
         ({"spacing": 0}, "spacing"),
         ({"chains": 0}, "chains"),
@@ -71,13 +74,22 @@ def test_options_must_be_pso_options():
     ],  # fmt: skip
 )
 def test_search_options_checked_before_any_work(search, name):
-    kw = {**TINY, "cost": "variance", "seeds": "auto", "nodes": NODES}
-    refused(name, lambda: seed_then_pso(ROOM, 4, search=search, **kw), within=2)
+    from placement.simselect import SearchOptions
+
+    def run():
+        options = (
+            SearchOptions(**search)
+            if isinstance(search, dict) and "start" not in search
+            else search
+        )
+        kw = {**TINY, "cost": "variance", "initial": "auto", "nodes": NODES}
+        seed_then_pso(ROOM, 4, search=options, **kw)
+
+    refused(name, run, within=2)
 
 
 @pytest.mark.parametrize("sigma", [0, -0.04, "x"])
 def test_peb_cost_sigma_is_an_error_not_a_failed_run(sigma):
-    refused("sigma", lambda: seed_then_pso(ROOM, 4, **{**TINY, "sigma": sigma}))
     refused("sigma", lambda: placement.PEBCost(ROOM, sigma=sigma))
 
 
@@ -90,20 +102,21 @@ def test_never_returns_a_degenerate_layout():
     """A mounting rectangle 1 mm wide: every layout is collinear (PEB inf everywhere)."""
     narrow = Room(size=(8.0, 4.0, 2.4), mounting=("south",), anchor_offset=1.1996)
     try:
-        res = seed_then_pso(narrow, 4, **{**TINY, "particles": 4, "iterations": 2})
+        res = seed_then_pso(narrow, 4, **{**TINY, "swarm": PSOOptions(particles=4, iterations=2)})
     except ValueError as exc:
         assert "collinear" in str(exc) or "degenerate" in str(exc)
         return
     assert not res.success or geometry(res.anchors) not in ("collinear", "coincident")
 
 
-def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
+def test_resume_skips_the_search(tmp_path, monkeypatch):
+    from placement.plan import LOCAL_SWARM
     from placement.simselect import SearchOptions
-    from placement.validation import ValidationOptions
 
     ckpt = tmp_path / "state.json"
-    kw = dict(cost="variance", particles=3, iterations=2, rng=0, progress=False)
-    kw.update(nodes=NODES, finalists=1, checkpoint=ckpt)
+    swarm = PSOOptions(**{**LOCAL_SWARM.__dict__, "particles": 3, "iterations": 2})
+    kw = dict(cost="variance", swarm=swarm, rng=0, progress=False)
+    kw.update(nodes=NODES, checkpoint=ckpt)
     kw["validation"] = ValidationOptions(realizations=0)
     kw["search"] = SearchOptions(
         spacing=2.0,
@@ -118,13 +131,13 @@ def test_resume_skips_the_seed_search(tmp_path, monkeypatch):
     import placement.simselect as simselect
 
     def no_search(*a, **k):
-        raise AssertionError("the seed search ran again")
+        raise AssertionError("the search ran again")
 
     monkeypatch.setattr(simselect, "simulated_select", no_search)
     again = seed_then_pso(ROOM, 4, **kw)
     np.testing.assert_array_equal(first.anchors, again.anchors)
-    assert [s.name for s in first.seeds] == [s.name for s in again.seeds]
-    assert again.settings["seed_search"]["resumed"]
+    assert [s.name for s in first.initial] == [s.name for s in again.initial]
+    assert again.settings["search_result"]["resumed"]
 
 
 def test_room_none_is_the_default_room_and_anything_else_is_refused():
@@ -191,12 +204,14 @@ def test_a_table_of_exactly_M_candidates_is_searched_not_a_crash():
     refused("workers", lambda: simulated_select(ROOM, 4, options=opt, table=t, workers=0))
 
 
-def test_seed_layouts_must_have_M_anchors():
+def test_initial_layouts_must_have_M_anchors():
     six = np.stack([ROOM.corners_layout()[:3]] * 2).reshape(1, 6, 3)
-    refused("seeds", lambda: seed_then_pso(ROOM, 4, **{**TINY, "seeds": np.concatenate([six] * 2)}))
+    refused(
+        "initial", lambda: seed_then_pso(ROOM, 4, **{**TINY, "initial": np.concatenate([six] * 2)})
+    )
     refused("initial", lambda: placement.pso(placement.PEBCost(ROOM), ROOM, 4, initial=six))
-    one = seed_then_pso(ROOM, 4, **{**TINY, "seeds": CORNERS})  # one (M, 3) layout
-    assert [s.name for s in one.seeds] == ["user-1"]
+    one = seed_then_pso(ROOM, 4, **{**TINY, "initial": CORNERS})  # one (M, 3) layout
+    assert [s.name for s in one.initial] == ["user-1"]
 
 
 @pytest.mark.parametrize("tolerance", [np.nan, -0.01, 5.0])
@@ -216,10 +231,10 @@ def test_no_realizations_are_an_empty_batch():
     assert scene.ranges_batch([], noise=False).shape == (0, len(FEW), 4)
 
 
-def test_user_seeds_are_reported_as_the_swarm_uses_them():
+def test_user_initial_layouts_are_reported_as_the_swarm_uses_them():
     off = CORNERS + [0.0, 0.0, 1.5]  # above the ceiling: the swarm projects them
-    res = seed_then_pso(ROOM, 4, **{**TINY, "seeds": off[None]})
-    seed = res.seeds[0]
+    res = seed_then_pso(ROOM, 4, **{**TINY, "initial": off[None]})
+    seed = res.initial[0]
     assert placement.on_surfaces(ROOM, seed.anchors).all()
     from analysis import peb
 

@@ -27,8 +27,8 @@ def test_plan_end_to_end_with_search_and_simulated_cost(tmp_path, capsys):
     np.testing.assert_array_equal(anchors, np.array(res["anchors"]))
     assert placement.on_surfaces(room, anchors).all()
     assert res["cost_name"] == "variance" and res["nfev"] == 8
-    assert res["seeds"][0]["name"] == "search-1"
-    assert res["settings"]["seed_search"]["nfev"] > 0
+    assert res["initial"][0]["name"] == "search-1"
+    assert res["settings"]["search_result"]["nfev"] > 0
     # the finalists were scored on fresh draws and the lowest one is the answer
     best = min(res["finalists"], key=lambda f: f["cost"])
     np.testing.assert_array_equal(anchors, np.array(best["anchors"]))
@@ -46,7 +46,7 @@ def test_plan_bad_input_exit_2(tmp_path, capsys):
 
 @pytest.mark.parametrize(
     ("argv", "particles"),
-    [([], 5), (["--no-seeds"], 15), (["--cost", "peb"], 15), (["--particles", "7"], 7)],
+    [([], 5), (["--no-initial"], 15), (["--cost", "peb"], 15), (["--particles", "7"], 7)],
 )
 def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
     """--finalists may be as large as the swarm the library runs for that command."""

@@ -120,13 +120,13 @@ def test_plain_process_pool_breaking_raises_after_the_checkpoint(tmp_path):
 def test_eval_timeout_makes_the_particle_inf(tmp_path, monkeypatch, mode):
     monkeypatch.setattr(PSO_MODULE, "_DEADLINE_GRACE", 1.0)
     cost = StallOnce(str(tmp_path / "stalled"), hard=mode == "pool-hard")
-    options = PSOOptions(particles=4, iterations=2, tol=0.0)
+    options = PSOOptions(particles=4, iterations=2, tol=0.0, eval_timeout=0.5)
     t0 = time.monotonic()
     if mode == "serial":
-        res = pso(cost, ROOM, 4, options=options, rng=0, eval_timeout=0.5)
+        res = pso(cost, ROOM, 4, options=options, rng=0)
     else:
         with WorkerPool(2) as pool:
-            res = pso(cost, ROOM, 4, options=options, rng=0, executor=pool, eval_timeout=0.5)
+            res = pso(cost, ROOM, 4, options=options, rng=0, executor=pool)
     assert time.monotonic() - t0 < 30
     assert res.success and res.extra["timeouts"] >= 1 and res.failures == res.extra["timeouts"]
     assert res.extra["lost"] == 0
@@ -135,7 +135,7 @@ def test_eval_timeout_makes_the_particle_inf(tmp_path, monkeypatch, mode):
 def test_eval_timeout_is_checked():
     for bad in (0, -1, float("nan"), "1", True):
         with pytest.raises(ValueError, match="^eval_timeout: must be a finite number > 0 s"):
-            pso(mean_peb, ROOM, 4, options=OPTIONS, eval_timeout=bad)
+            PSOOptions(eval_timeout=bad)
 
 
 @pytest.mark.skipif(
@@ -149,7 +149,7 @@ def test_cli_rebuilds_its_pool_after_a_killed_worker(tmp_path, monkeypatch, caps
         return KillOnce(flag)(anchors, rng) and real(self, anchors, rng)
 
     monkeypatch.setattr(placement.PEBCost, "__call__", dying)
-    argv = ["plan", "--anchors", "4", "--cost", "peb", "--no-seeds", "--particles", "4"]
+    argv = ["plan", "--anchors", "4", "--cost", "peb", "--no-initial", "--particles", "4"]
     argv += ["--iterations", "3", "--finalists", "1", "--validate-realizations", "0"]
     argv += ["--no-progress", "--workers", "2", "--out", str(tmp_path / "out")]
     assert main(argv) == 0
@@ -182,7 +182,7 @@ def _running(pid):
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs /proc")
 def test_no_orphan_workers_after_sigkill_of_the_cli(tmp_path):
     exe = Path(sys.executable).with_name("anchorplan")
-    cmd = [str(exe), "plan", "--anchors", "4", "--cost", "peb", "--no-seeds"]
+    cmd = [str(exe), "plan", "--anchors", "4", "--cost", "peb", "--no-initial"]
     cmd += ["--particles", "4", "--iterations", "100000", "--finalists", "1"]
     cmd += ["--validate-realizations", "0", "--no-progress", "--workers", "2"]
     cmd += ["--out", str(tmp_path / "out")]
@@ -208,7 +208,7 @@ def test_no_orphan_workers_after_sigkill_of_the_cli(tmp_path):
 
 def test_cli_says_it_resumed_and_from_which_iteration(tmp_path, capsys):
     ckpt = tmp_path / "state.json"
-    argv = ["plan", "--anchors", "4", "--cost", "peb", "--no-seeds", "--particles", "4"]
+    argv = ["plan", "--anchors", "4", "--cost", "peb", "--no-initial", "--particles", "4"]
     argv += ["--iterations", "3", "--finalists", "1", "--validate-realizations", "0"]
     argv += ["--no-progress", "--workers", "1", "--checkpoint", str(ckpt)]
     assert main([*argv, "--out", str(tmp_path / "a")]) == 0

@@ -1,5 +1,6 @@
 """Keep-outs and tag zones of the room model, and that every placement step respects them."""
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -10,6 +11,7 @@ from hypothesis import strategies as st
 
 import placement
 from placement.cli import main
+from placement.plan import LOCAL_SWARM
 from placement.pso import PSOOptions, pso
 from simulation import SURFACES, Room
 
@@ -50,6 +52,9 @@ def rooms_with_keepouts(draw):
         return Room(size=size, mounting=tuple(mounting), keepouts=keepouts)
     except ValueError:  # a surface covered entirely: rejected (tested separately)
         assume(False)
+
+
+_LOCAL3 = dataclasses.replace(LOCAL_SWARM, particles=3, iterations=2)
 
 
 def assert_allowed(room, points):
@@ -500,12 +505,14 @@ def test_a_short_seed_then_pso_never_returns_a_point_in_a_keepout(room, seed):
     )  # fmt: skip
     try:
         res = placement.seed_then_pso(
-            room, 4, search=search, particles=3, iterations=2, rng=seed, progress=False,
+            room, 4, search=search, swarm=_LOCAL3, rng=seed, progress=False,
             nodes=room.grid((3, 3, 2)), validation=ValidationOptions(realizations=0),
         )  # fmt: skip
     except ValueError as exc:  # too few candidate points for 4 anchors in this room
         assert "candidate" in str(exc) or "anchors" in str(exc)
         return
-    layouts = [res.anchors] + [s.anchors for s in res.seeds] + [f["anchors"] for f in res.finalists]
+    layouts = (
+        [res.anchors] + [s.anchors for s in res.initial] + [f["anchors"] for f in res.finalists]
+    )
     for a in layouts:
         assert_allowed(room, a)

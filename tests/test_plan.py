@@ -1,3 +1,4 @@
+import dataclasses
 import json
 from concurrent.futures import ThreadPoolExecutor
 
@@ -6,7 +7,9 @@ import pytest
 
 import placement
 from placement.costs import DrawsCost
-from placement.plan import choose_finalist, seed_then_pso
+from placement.finalists import FinalistOptions, score_finalists
+from placement.plan import LOCAL_SWARM, seed_then_pso
+from placement.pso import PSOOptions
 from placement.rangetable import node_draws, range_table, table_errors
 from placement.simselect import SearchOptions
 from placement.validation import ValidationOptions, validate_layout
@@ -27,24 +30,28 @@ SMALL = SearchOptions(
 QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10, mount_draws=2)
 
 
+def _swarm(particles=4, iterations=2):
+    return dataclasses.replace(LOCAL_SWARM, particles=particles, iterations=iterations)
+
+
 def _plan(**kw):
-    base = dict(search=SMALL, particles=4, iterations=2, validation=QUICK, rng=0)
+    base = dict(search=SMALL, swarm=_swarm(), validation=QUICK, rng=0)
     base.update(progress=False, nodes=NODES)
     base.update(kw)
     return seed_then_pso(ROOM, 4, **base)
 
 
-def test_seed_then_pso_bound_driven_with_user_seeds():
-    seeds = ROOM.corners_layout()[None]
+def test_seed_then_pso_bound_driven_with_user_initial_layouts():
+    initial = ROOM.corners_layout()[None]
     res = seed_then_pso(
-        ROOM, 4, particles=6, iterations=5, cost="peb", seeds=seeds, rng=0, progress=False,
-        validate_realizations=0,
+        ROOM, 4, swarm=PSOOptions(particles=6, iterations=5), cost="peb", initial=initial,
+        rng=0, progress=False, validation=ValidationOptions(realizations=0),
     )  # fmt: skip
     assert res.anchors.shape == (4, 3)
     assert placement.on_surfaces(ROOM, res.anchors).all()
-    assert res.seeds[0].name == "user-1"
-    assert res.seeds[0].cost == pytest.approx(res.seeds[0].mean_peb)
-    assert res.cost <= res.seeds[0].cost
+    assert res.initial[0].name == "user-1"
+    assert res.initial[0].cost == pytest.approx(res.initial[0].mean_peb)
+    assert res.cost <= res.initial[0].cost
     assert np.all(np.diff(res.history) <= 0)
     d = json.loads(res.to_json())
     assert d["settings"]["M"] == 4 and len(d["history"]) == res.nit
@@ -64,7 +71,7 @@ def test_the_drawn_cost_is_a_range_table_of_the_layout():
 def test_seed_then_pso_simulated_chain_and_its_phases():
     res = _plan()
     assert res.success and placement.on_surfaces(ROOM, res.anchors).all()
-    assert [s.name for s in res.seeds][:1] == ["search-1"]
+    assert [s.name for s in res.initial][:1] == ["search-1"]
     assert set(res.timings) >= {"search", "pso", "finalists", "validation", "total"}
     n = res.settings["nfev_by_phase"]
     assert n["search"] > 0 and n["pso"] == res.nfev == 8
@@ -76,9 +83,9 @@ def test_seed_then_pso_simulated_chain_and_its_phases():
 
 
 def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws():
-    res = _plan(finalists=3)
+    res = _plan(finalists=FinalistOptions(count=3))
     f = res.finalists
-    assert {s.name for s in res.seeds} <= {d["source"] for d in f}  # seeds always compete
+    assert {s.name for s in res.initial} <= {d["source"] for d in f}  # they always compete
     assert any(d["source"].startswith("refined-") for d in f)  # so do the refined layouts
     assert not any(
         np.allclose(a["anchors"], b["anchors"]) for i, a in enumerate(f) for b in f[i + 1 :]
@@ -97,24 +104,25 @@ def test_the_finalists_draws_are_new_noise_at_the_exact_nodes_unless_asked_other
         return DrawsCost(ROOM, sets, exact_draws=exact, mount_tolerance=0.03,
                          seed=checks.substream(0, 5))  # fmt: skip
 
-    res = _plan(finalist_draws=3, validate_realizations=0)
-    assert res.settings["finalist_exact_draws"] == 3
+    none = ValidationOptions(realizations=0)
+    res = _plan(finalists=FinalistOptions(draws=3), validation=none)
+    assert res.settings["finalists"] == {"count": 1, "draws": 3, "exact_draws": None}
     assert [d["cost"] for d in res.finalists] == [fresh(3, 3)(d["anchors"]) for d in res.finalists]
-    mixed = _plan(finalist_draws=3, finalist_exact_draws=1, validate_realizations=0)
+    mixed = _plan(finalists=FinalistOptions(draws=3, exact_draws=1), validation=none)
     assert [d["cost"] for d in mixed.finalists] == [
         fresh(3, 1)(d["anchors"]) for d in mixed.finalists
     ]
     assert [d["cost"] for d in mixed.finalists] != [d["cost"] for d in res.finalists]
-    with pytest.raises(ValueError, match=r"finalist_exact_draws.*\[0, 3\]"):
-        _plan(finalist_draws=3, finalist_exact_draws=4)
+    with pytest.raises(ValueError, match=r"exact_draws.*\[0, 3\]"):
+        FinalistOptions(draws=3, exact_draws=4)
 
 
-def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
+def test_the_finalists_are_scored_on_the_given_cost_serially_or_in_parallel():
     res = _plan()
     fresh = DrawsCost(ROOM, node_draws(ROOM, NODES, 2, 1, rng=1), exact_draws=1, seed=4)
-    one = choose_finalist(res.pso, res.seeds, fresh, 2)
+    one = score_finalists(res.pso, res.initial, fresh, 2)
     with ThreadPoolExecutor(2) as ex:
-        two = choose_finalist(res.pso, res.seeds, fresh, 2, ex)
+        two = score_finalists(res.pso, res.initial, fresh, 2, ex)
     assert [d["cost"] for d in one] == [d["cost"] for d in two]
     assert [d["cost"] for d in one] == [fresh(d["anchors"]) for d in one]
 
@@ -122,17 +130,19 @@ def test_choose_finalist_scores_on_the_given_cost_serially_or_in_parallel():
 def test_same_result_serially_and_with_an_executor():
     a = _plan(rng=5)
     with ThreadPoolExecutor(2) as ex:
-        b = _plan(rng=5, executor=ex, workers=2)
+        b = _plan(rng=5, executor=ex)
     np.testing.assert_array_equal(a.anchors, b.anchors)
     assert a.validation["std"] == b.validation["std"]
     assert a.validation["held_out"] == b.validation["held_out"]
 
 
-def test_options_are_honoured_and_clashes_refused():
-    res = _plan(particles=None, iterations=None, options=placement.PSOOptions(4, 2))
-    assert res.nfev == 8 and res.settings["particles"] == 4
-    with pytest.raises(ValueError, match="particles"):
-        _plan(particles=5, options=placement.PSOOptions(4, 2))
+def test_the_swarm_options_are_honoured_and_checked():
+    res = _plan(swarm=placement.PSOOptions(4, 2))
+    assert res.nfev == 8 and res.settings["swarm"]["particles"] == 4
+    with pytest.raises(ValueError, match="^swarm: must be a PSOOptions"):
+        _plan(swarm={"particles": 4})
+    with pytest.raises(ValueError, match=r"^finalists.count: must be an integer in \[1, 4\]"):
+        _plan(finalists=FinalistOptions(count=5))
 
 
 def test_each_refined_layout_is_refined_on_its_own_columns():
@@ -141,42 +151,36 @@ def test_each_refined_layout_is_refined_on_its_own_columns():
     def refined(res):
         return {f["source"]: f["anchors"] for f in res.finalists if f["source"].startswith("ref")}
 
-    one = refined(_plan(iterations=1))
-    two = refined(_plan(search={**SMALL.__dict__, "fine_optima": 2}, iterations=1))
+    one = refined(_plan(swarm=_swarm(iterations=1)))
+    two = refined(_plan(search=dataclasses.replace(SMALL, fine_optima=2), swarm=_swarm(4, 1)))
     assert sorted(one) == ["refined-1"] and sorted(two) == ["refined-1", "refined-2"]
     np.testing.assert_array_equal(one["refined-1"], two["refined-1"])
     assert not np.array_equal(two["refined-1"], two["refined-2"])
 
 
-def test_the_mounting_tolerance_reaches_every_stage_and_clashes_are_refused():
-    res = _plan(search={**SMALL.__dict__, "mount_tolerance": 0.0}, iterations=1)
+def test_the_mounting_tolerance_is_set_once_and_reaches_every_stage():
+    res = _plan(search=dataclasses.replace(SMALL, mount_tolerance=0.0), swarm=_swarm(4, 1))
     assert res.settings["search"]["mount_tolerance"] == 0.0 == res.settings["mount_tolerance"]
-    # the plan's tolerance sets the table's: a search without one takes it
-    a = _plan(search={**SMALL.__dict__, "mount_tolerance": 0.2}, iterations=1)
-    b = _plan(search={k: v for k, v in SMALL.__dict__.items() if k != "mount_tolerance"},
-              mount_tolerance=0.2, iterations=1)  # fmt: skip
-    assert b.settings["search"]["mount_tolerance"] == 0.2
-    np.testing.assert_array_equal(a.anchors, b.anchors)
-    assert a.validation["std"] == b.validation["std"]
-    with pytest.raises(ValueError, match="mount_tolerance: 0.05 m contradicts search"):
-        _plan(mount_tolerance=0.05)  # SMALL sets 0.03
+    assert "mounting" not in res.validation  # nothing to check with exact mounting
     t = range_table(ROOM, ROOM.corners_layout(), NODES, draws=2, exact_draws=1,
                     mount_tolerance=0.03, rng=0)  # fmt: skip
     with pytest.raises(ValueError, match="table: built with mount_tolerance 0.03"):
-        _plan(search=None, mount_tolerance=0.05, table=t)
+        placement.Planner(ROOM, 4, search=SearchOptions(mount_tolerance=0.05), table=t)
 
 
 def test_seed_then_pso_rejects_bad_input():
     with pytest.raises(ValueError, match="M"):
-        seed_then_pso(ROOM, 3, cost="peb", seeds=None, progress=False)
-    with pytest.raises(ValueError, match="seeds"):
-        seed_then_pso(ROOM, 4, cost="peb", seeds="best", progress=False)
-    with pytest.raises(ValueError, match="validate_realizations"):
-        seed_then_pso(ROOM, 4, cost="peb", seeds=None, validate_realizations=-1)
-    with pytest.raises(ValueError, match="start"):
+        seed_then_pso(ROOM, 3, cost="peb", initial=None, progress=False)
+    with pytest.raises(ValueError, match="initial"):
+        seed_then_pso(ROOM, 4, cost="peb", initial="best", progress=False)
+    with pytest.raises(ValueError, match="realizations"):
+        ValidationOptions(realizations=-1)
+    with pytest.raises(ValueError, match="^search: must be a SearchOptions"):
         seed_then_pso(ROOM, 4, search={"start": 1}, progress=False)
-    with pytest.raises(ValueError, match="finalists"):
-        _plan(finalists=0)
+    with pytest.raises(ValueError, match="count"):
+        FinalistOptions(count=0)
+    with pytest.raises(TypeError):  # the keywords of an unreleased version are gone
+        seed_then_pso(ROOM, 4, particles=4)
 
 
 def test_validation_checks_are_reproducible_and_independent_of_the_executor():

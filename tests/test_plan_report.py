@@ -1,11 +1,13 @@
 """plan -> result.json -> PlacementResult.from_dict and -> the HTML report, round trip."""
 
+import dataclasses
 import json
 
 import numpy as np
 
 from analysis.report import write_report
-from placement.plan import PlacementResult, seed_then_pso
+from placement.plan import LOCAL_SWARM, seed_then_pso
+from placement.plan_result import PlacementResult
 from placement.simselect import SearchOptions
 from placement.surfaces import naive_layout
 from placement.validation import ValidationOptions
@@ -21,8 +23,9 @@ def test_result_json_round_trip_and_report(tmp_path):
     )  # fmt: skip
     quick = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=10,
                               mount_draws=1)  # fmt: skip
-    res = seed_then_pso(ROOM, 4, search=search, particles=3, iterations=1, validation=quick,
-                        rng=0, progress=False)  # fmt: skip
+    swarm = dataclasses.replace(LOCAL_SWARM, particles=3, iterations=1)
+    res = seed_then_pso(ROOM, 4, search=search, swarm=swarm, validation=quick, rng=0,
+                        progress=False)  # fmt: skip
     (tmp_path / "result.json").write_text(res.to_json(indent=1))
     back = PlacementResult.from_dict(json.loads((tmp_path / "result.json").read_text()))
     assert json.loads(back.to_json()) == {**json.loads(res.to_json()), "costs": None}

@@ -1,6 +1,8 @@
 """Polygonal rooms and obstacles: the floor plan, its validation, line of sight, the
 image sources against the shoebox's and against pyroomacoustics, and placement in them."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -9,6 +11,7 @@ from peer import pra_general_windows
 
 import analysis
 import placement
+from placement.plan import LOCAL_SWARM
 from simulation import Room, simulate_ranges
 from simulation.multipath import compute_paths
 from simulation.polyhedral import line_of_sight
@@ -296,7 +299,8 @@ def test_a_short_plan_in_the_l_shaped_lab_places_allowed_anchors():
                               mount_draws=1)  # fmt: skip
     nodes = LAB.grid()[::6]
     res = placement.seed_then_pso(LAB, 6, rng=0, search=search, validation=quick, nodes=nodes,
-                                  particles=3, progress=False)  # fmt: skip
+                                  swarm=dataclasses.replace(LOCAL_SWARM, particles=3),
+                                  progress=False)  # fmt: skip
     assert res.success and placement.allowed(LAB, res.anchors, tol=1e-6).all()
     assert not LAB.in_obstacle(res.anchors).any() and not LAB.in_keepout(res.anchors).any()
     for block in (res.validation, res.validation["mounting"]):

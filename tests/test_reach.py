@@ -11,6 +11,7 @@ import pytest
 from scipy.special import ndtr
 
 import analysis
+from placement.plan import LOCAL_SWARM
 from simulation import Chirp, Receiver, Room, Signal, evaluate_layout, simulate_ranges
 from simulation import air as air_model
 from simulation.evaluation import RangingScene
@@ -330,7 +331,8 @@ def test_the_plan_scores_availability_first_and_says_so(caplog):
                               mount_draws=1)  # fmt: skip
     with caplog.at_level("WARNING", logger="placement"):
         res = placement.seed_then_pso(room, 8, rng=0, search=search, validation=quick,
-                                      particles=3, progress=False)  # fmt: skip
+                                      swarm=dataclasses.replace(LOCAL_SWARM, particles=3),
+                                      progress=False)  # fmt: skip
     assert "larger than the signal's reach" in caplog.text
     reach = res.settings["reach"]
     assert reach["exceeded"] and reach["reach_m"] == pytest.approx(room.reach)

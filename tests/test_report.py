@@ -152,7 +152,7 @@ def test_report_from_result_json_with_simulator(tmp_path, monkeypatch):
     for want in wanted:
         assert want in titles
     names = [e.name for e in rep.layouts]
-    assert names == ["optimized", "naive", "corners", "seed relax-A", "seed relax-D"]
+    assert names == ["optimized", "naive", "corners", "initial relax-A", "initial relax-D"]
     body = "".join(c.text)
     # σ / mean / P95 of the stored validation, mean PEB computed here, coordinates
     v = result["validation"]
@@ -256,7 +256,7 @@ def test_report_merges_the_same_layout_from_both_files(tmp_path):
     )
     layouts = rp.collect_layouts(rp.load_results(tmp_path), ROOM, NODES)
     opt = layouts[0]
-    assert [e.role for e in layouts] == ["optimized", "reference", "seed", "seed"]
+    assert [e.role for e in layouts] == ["optimized", "reference", "initial", "initial"]
     assert opt.sim.realizations == 9 and opt.sim.source == "evaluation.json"
 
 

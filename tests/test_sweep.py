@@ -1,3 +1,4 @@
+import dataclasses
 import json
 
 import numpy as np
@@ -7,11 +8,13 @@ import placement
 from placement.anchor_sweep import sweep
 from placement.cli import main
 from placement.cli.sweep import parse_counts
+from placement.plan import LOCAL_SWARM
 from placement.simselect import SearchOptions
 from placement.validation import ValidationOptions
 from simulation import Room
 
 ROOM = Room.techtile()
+SWARM = dataclasses.replace(LOCAL_SWARM, particles=3, iterations=1)
 NODES = ROOM.grid()[::27]
 SMALL = SearchOptions(
     spacing=2.0,
@@ -27,7 +30,7 @@ QUICK = ValidationOptions(realizations=2, held_out_realizations=1, random_nodes=
 
 
 def test_sweep_rows_and_recommendation():
-    kw = dict(search=SMALL, particles=3, iterations=1, validation=QUICK, nodes=NODES)
+    kw = dict(search=SMALL, swarm=SWARM, validation=QUICK, nodes=NODES)
     res = sweep(ROOM, [5, 4], target_p95=100.0, rng=0, progress=False, **kw)
     assert [r.M for r in res.rows] == [4, 5]
     for r in res.rows:
@@ -66,7 +69,7 @@ def test_sweep_cli_bad_input_exit_2(tmp_path, capsys):
 def test_sweep_report_renders(tmp_path):
     from analysis.sweep_report import write_sweep_report
 
-    kw = dict(search=SMALL, particles=3, iterations=1, validation=QUICK, nodes=NODES)
+    kw = dict(search=SMALL, swarm=SWARM, validation=QUICK, nodes=NODES)
     res = sweep(ROOM, [4], target_p95=100.0, rng=0, progress=False, **kw)
     (tmp_path / "sweep.json").write_text(res.to_json())
     page = write_sweep_report(tmp_path).read_text()
@@ -77,3 +80,14 @@ def test_placement_sweep_is_the_function():
     from placement.anchor_sweep import sweep as fn
 
     assert placement.sweep is fn and callable(placement.sweep)
+
+
+def test_a_sweep_row_is_the_plan_for_that_M():
+    """The sweep's shared table is the one a plan builds (the run's stream "table"), so its
+    row for M is ``seed_then_pso(M=...)`` with the same arguments."""
+    kw = dict(search=SMALL, swarm=SWARM, validation=QUICK, nodes=NODES, progress=False)
+    res = sweep(ROOM, [4, 5], rng=3, **kw)
+    for row in res.rows:
+        plan = placement.seed_then_pso(ROOM, row.M, rng=3, **kw)
+        np.testing.assert_array_equal(row.anchors, plan.anchors)
+        assert row.std == plan.validation["std"] and row.p95 == plan.validation["p95"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import re
 import time
 
@@ -58,7 +59,11 @@ def register(sub) -> None:
         default=100,
         help="noise realizations validating the chosen layout (100; 0: no validation)",
     )
-    p.add_argument("--no-seeds", action="store_true", help="unseeded swarm (paper's setting)")
+    p.add_argument(
+        "--no-initial",
+        action="store_true",
+        help="no starting layouts: an unseeded swarm of random particles (the paper's setting)",
+    )
     p.add_argument("--search-spacing", type=float, help="candidate spacing of the search, m")
     p.add_argument("--search-chains", type=int, help="independent search chains")
     p.add_argument("--search-evaluations", type=int, help="table layouts scored per chain")
@@ -67,8 +72,8 @@ def register(sub) -> None:
         "--finalists",
         type=int,
         default=1,
-        help="best distinct swarm layouts scored, with the seeds and the refined layout, on "
-        "fresh draws (1)",
+        help="best distinct swarm layouts scored, with the starting layouts and the refined "
+        "layout, on fresh draws (1)",
     )
     p.add_argument(
         "--finalist-draws", type=int, default=12, help="fresh draws of the finalists (12)"
@@ -128,60 +133,80 @@ def _executor(args, stack: contextlib.ExitStack):
     return None
 
 
-def _search_options(args):
-    """The search settings given on the command line (unset: the library's defaults)."""
+#: the options objects' fields that a flag of this command sets, by the flag's name
+FLAGS = {
+    "search": {"spacing": "--search-spacing", "chains": "--search-chains",
+               "evaluations": "--search-evaluations", "draws": "--search-draws",
+               "exact_draws": "--search-draws", "mount_tolerance": "--mount-tolerance"},
+    "swarm": {"particles": "--particles", "iterations": "--iterations",
+              "eval_timeout": "--eval-timeout"},
+    "finalists": {"count": "--finalists", "draws": "--finalist-draws",
+                  "exact_draws": "--finalist-exact-draws"},
+    "validation": {"realizations": "--validate-realizations"},
+}  # fmt: skip
+
+
+def _as_flag(kind: str, exc: ValueError) -> ValueError:
+    """The library's error about an option's field, naming the flag that sets it."""
+    text = str(exc)
+    name = text.split(":")[0].removeprefix(f"{kind}.").removeprefix("finalists.")
+    flag = FLAGS[kind].get(name)
+    return ValueError(f"{flag}{text[len(text.split(':')[0]) :]}" if flag else text)
+
+
+def plan_options(args) -> dict:
+    """The library's options objects from the command line's flags (unset: the library's
+    defaults); an error names the flag."""
+    from placement.finalists import FinalistOptions
+    from placement.plan import default_swarm
     from placement.simselect import SearchOptions
+    from placement.validation import ValidationOptions
 
+    initial = None if args.no_initial else "auto"
     given = {
-        "spacing": args.search_spacing,
-        "chains": args.search_chains,
-        "evaluations": args.search_evaluations,
-        "draws": args.search_draws,
-        "mount_tolerance": args.mount_tolerance,
-    }
-    try:
-        return SearchOptions(**{k: v for k, v in given.items() if v is not None})
-    except ValueError as exc:
-        name = str(exc).split(":")[0]
-        flag = "--mount-tolerance" if name == "mount_tolerance" else f"--search-{name}"
-        raise ValueError(f"{flag}{str(exc)[len(name) :]}") from None
+        "search": {"spacing": args.search_spacing, "chains": args.search_chains,
+                   "evaluations": args.search_evaluations, "draws": args.search_draws,
+                   "mount_tolerance": args.mount_tolerance},
+        "swarm": {"particles": args.particles, "iterations": args.iterations,
+                  "eval_timeout": args.eval_timeout},
+        "finalists": {"count": args.finalists, "draws": args.finalist_draws,
+                      "exact_draws": args.finalist_exact_draws},
+        "validation": {"realizations": args.validate_realizations},
+    }  # fmt: skip
+    base = {"search": SearchOptions(), "swarm": default_swarm(args.cost, initial),
+            "finalists": FinalistOptions(), "validation": ValidationOptions()}  # fmt: skip
+    out = {"initial": initial}
+    for kind, values in given.items():
+        changes = {k: v for k, v in values.items() if v is not None}
+        try:
+            out[kind] = dataclasses.replace(base[kind], **changes)
+        except ValueError as exc:
+            if kind == "search" and str(exc).startswith("exact_draws"):
+                exact = base["search"].exact_draws  # the draws at the exact nodes
+                raise ValueError(f"--search-draws: must be at least the search's {exact} "
+                                 f"exact draws, got {args.search_draws}") from None  # fmt: skip
+            raise _as_flag(kind, exc) from None
+    return out
 
 
-def _check_args(args, room):
+def _check_args(args, room) -> dict:
     """Every number and file of the command, checked before any work; returns the
-    search settings."""
-    from placement.plan import LOCAL_SWARM
-    from placement.pso import MAX_ITERATIONS, MAX_PARTICLES, PSOOptions, load_checkpoint
-    from placement.rangetable import MAX_MOUNT_TOLERANCE
+    library's options (:func:`plan_options`)."""
+    from placement.pso import load_checkpoint
     from placement.surfaces import MAX_ANCHORS, candidate_grid
     from simulation.evaluation import BYTES_PER_RANGE
 
-    if args.particles is not None:
-        checks.count("--particles", args.particles, low=2, high=MAX_PARTICLES)
-    if args.iterations is not None:
-        checks.count("--iterations", args.iterations, low=1, high=MAX_ITERATIONS)
-    checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
-    # the library's swarm: the local one for a simulated cost with seeds, the paper's else
-    local = not args.no_seeds and args.cost != "peb"
-    particles = args.particles or (LOCAL_SWARM if local else PSOOptions()).particles
-    checks.count("--finalists", args.finalists, low=1, high=particles)
-    checks.count("--finalist-draws", args.finalist_draws, low=1, high=MAX_REALIZATIONS)
-    if args.finalist_exact_draws is not None:
-        checks.count(
-            "--finalist-exact-draws", args.finalist_exact_draws, low=0, high=args.finalist_draws
-        )
+    opts = plan_options(args)
+    if opts["finalists"].count > opts["swarm"].particles:
+        raise ValueError(f"--finalists: must be an integer in [1, {opts['swarm'].particles}] "
+                         f"(the swarm's particles), got {args.finalists}")  # fmt: skip
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
     if args.scheduler and args.workers > 0:
         raise ValueError("--scheduler and --workers: choose one")
-    if args.eval_timeout is not None:
-        checks.real("--eval-timeout", args.eval_timeout, low=0.0, low_open=True, unit="s")
-    checks.real(
-        "--mount-tolerance", args.mount_tolerance, low=0.0, high=MAX_MOUNT_TOLERANCE, unit="m"
-    )
-    search = _search_options(args)
     M = checks.count("--anchors", args.anchors, low=4, high=MAX_ANCHORS)
-    if not args.no_seeds and args.cost != "peb":
+    search = opts["search"]
+    if not args.no_initial and args.cost != "peb":
         spacing = search.spacing_for(room)
         n = len(candidate_grid(room, spacing))
         if n > MAX_SEARCH_CANDIDATES:
@@ -194,12 +219,9 @@ def _check_args(args, room):
                 f"--anchors: {M} anchors exceed the {n} candidate points of the search "
                 f"(--search-spacing {spacing:g} m) in this room"
             )
-    checks.check_size(
-        "--validate-realizations",
-        args.validate_realizations * len(room.grid()) * M * BYTES_PER_RANGE,
-        value=args.validate_realizations,
-        hint="use fewer realizations",
-    )
+    R = opts["validation"].realizations
+    checks.check_size("--validate-realizations", R * len(room.grid()) * M * BYTES_PER_RANGE,
+                      value=R, hint="use fewer realizations")  # fmt: skip
     if args.checkpoint is not None:
         checks.output_path("--checkpoint", args.checkpoint)
         state = load_checkpoint(args.checkpoint)  # a damaged file fails here, not at the end
@@ -209,17 +231,16 @@ def _check_args(args, room):
                 "it is resumed if it was written by this same command",
                 flush=True,
             )
-    return search
+    return opts
 
 
 def run(args) -> int:
     """Run ``anchorplan plan`` on parsed ``args``; the exit status (0: done)."""
     from placement.plan import seed_then_pso
-    from placement.pso import default_eval_timeout
 
     out = output_dir("--out", args.out)
     room = apply_signal(args, load_room(args.room, args))
-    search = _check_args(args, room)
+    opts = _check_args(args, room)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
@@ -231,26 +252,9 @@ def run(args) -> int:
             flush=True,
         )
         print(describe_signal(room), flush=True)
-        with default_eval_timeout(args.eval_timeout):
-            res = seed_then_pso(
-                room,
-                args.anchors,
-                cost=args.cost,
-                seeds=None if args.no_seeds else "auto",
-                search=search,
-                particles=args.particles,
-                iterations=args.iterations,
-                mount_tolerance=args.mount_tolerance,
-                finalists=args.finalists,
-                finalist_draws=args.finalist_draws,
-                finalist_exact_draws=args.finalist_exact_draws,
-                executor=executor,
-                workers=workers if executor is not None else 1,
-                rng=args.seed,
-                progress=not args.no_progress,
-                checkpoint=args.checkpoint,
-                validate_realizations=args.validate_realizations,
-            )
+        res = seed_then_pso(room, args.anchors, cost=args.cost, **opts, executor=executor,
+                            rng=args.seed, progress=not args.no_progress,
+                            checkpoint=args.checkpoint)  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     (out / "result.json").write_text(res.to_json(indent=1) + "\n")
     write_json(out / "layout.json", {"anchors": res.anchors})
@@ -264,12 +268,12 @@ def run(args) -> int:
 def _print_result(res, args) -> None:
     from numpy import array_equal
 
-    search = res.settings.get("seed_search") or {}
+    search = res.settings.get("search_result") or {}
     if search.get("resumed"):
         print(f"search: resumed from {args.checkpoint}.search.json")
-    for s in res.seeds:
+    for s in res.initial:
         table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
-        print(f"  seed {s.name:<12} swarm cost {s.cost:.4g}{table}")
+        print(f"  initial {s.name:<12} swarm cost {s.cost:.4g}{table}")
     swarm = res.pso
     extra = {} if swarm is None else swarm.extra
     if extra.get("resumed_from") is not None:
@@ -286,8 +290,8 @@ def _print_result(res, args) -> None:
     for f in res.finalists:
         mark = "*" if array_equal(f["anchors"], res.anchors) else " "
         print(
-            f" {mark}finalist {f['source']:<10} swarm cost {f['pso_cost']:.4g}, "
-            f"fresh draws {f['cost']:.4g}"
+            f" {mark}finalist {f['source']:<10} swarm cost {_num(f['pso_cost'])}, "
+            f"fresh draws {_num(f['cost'])}"
         )
     print("anchors (m):")
     for a in res.anchors:
@@ -319,6 +323,11 @@ def _print_validation(v: dict) -> None:
             f"sigma {m['std']:.3f} m, mean {m['mean']:.3f} m, P95 {m['p95']:.3f} m"
             + availability_note(m)
         )
+
+
+def _num(x) -> str:
+    """A cost for the summary: "–" when there is none (NaN)."""
+    return "–" if x != x else f"{x:.4g}"
 
 
 def _print_phases(res) -> None:

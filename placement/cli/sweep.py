@@ -16,7 +16,6 @@ from placement.cli.common import (
     write_json,
 )
 from placement.cli.plan import _executor
-from placement.workers import available_cores
 from simulation import checks
 
 
@@ -140,6 +139,7 @@ def _run_one(args, room, out):
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
+    from placement.validation import ValidationOptions
 
     counts = [checks.count("--anchors", m, low=4, high=100) for m in parse_counts(args.anchors)]
     if args.target_p95 is not None:
@@ -151,7 +151,6 @@ def _run_one(args, room, out):
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
-        workers = (args.workers or available_cores()) if executor is not None else 1
         print(f"sweeping M = {counts} in {room.name}, seed {args.seed}", flush=True)
         print(describe_signal(room), flush=True)
 
@@ -170,8 +169,7 @@ def _run_one(args, room, out):
             target_availability=args.target_availability,
             rng=args.seed,
             executor=executor,
-            workers=workers,
-            validate_realizations=args.validate_realizations,
+            validation=ValidationOptions(realizations=args.validate_realizations),
             progress=not args.no_progress,
             on_row=report,
         )

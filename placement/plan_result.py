@@ -1,0 +1,146 @@
+"""The planner's result (:func:`placement.seed_then_pso`): the ``result.json`` format."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from placement.initial import InitialLayout
+from placement.pso import PSOResult
+from placement.result import LayoutResult
+from placement.serialization import to_jsonable
+from simulation.room import Room
+from simulation.statistics import cost_unit
+
+#: status codes of :class:`PlacementResult`
+PLACEMENT_STATUS = {
+    0: "a layout was planned",
+    1: "no usable layout: every candidate failed or is degenerate",
+}
+
+
+@dataclass(frozen=True)
+class PlacementResult(LayoutResult):
+    """Result of :func:`seed_then_pso` (the result convention of :mod:`placement.result`).
+
+    anchors (M, 3) the chosen layout (m); cost (``fun``, in ``cost_unit``) its cost on the
+    finalists' fresh draws (a simulated cost), or in the swarm (otherwise); history the
+    swarm's best cost per iteration (non-increasing); finalists the layouts scored on
+    fresh draws (``source``, ``anchors``, swarm cost ``pso_cost``, fresh-draw cost
+    ``cost``; the chosen one has the lowest); initial the swarm's starting layouts with
+    their costs;
+    validation the checks of :func:`placement.validation.validate_layout`; timings the
+    seconds of every phase and ``total``; settings every setting of the run and
+    ``nfev_by_phase``. ``to_dict()`` is the ``result.json`` format and
+    :meth:`from_dict` reads it back.
+    """
+
+    FUN: ClassVar[str] = "cost"
+    STATUS: ClassVar[dict[int, str]] = PLACEMENT_STATUS
+
+    room: Room
+    anchors: np.ndarray
+    cost: float
+    cost_name: str
+    cost_unit: str
+    history: list[float]
+    best_anchors_history: list[np.ndarray]
+    nfev: int
+    nit: int
+    success: bool
+    status: int
+    message: str
+    initial: list[InitialLayout]
+    validation: dict[str, Any]
+    timings: dict[str, float]
+    settings: dict[str, Any]
+    pso: PSOResult | None = field(default=None, repr=False)
+    finalists: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def availability(self) -> float:
+        """The validated share of node realizations with a position fix at the evaluation
+        nodes (NaN without a validation); 1 − it is the share of the zone without a fix."""
+        return float((self.validation or {}).get("availability", math.nan))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plan as plain JSON types (``kind`` "plan"); :meth:`from_dict` reads it back."""
+        return {
+            "kind": "plan",
+            "room": self.room.to_dict(),
+            "anchors": self.anchors.tolist(),
+            "cost": self.cost,
+            "fun": self.cost,
+            "cost_name": self.cost_name,
+            "cost_unit": self.cost_unit,
+            "history": list(self.history),
+            "best_anchors_history": [np.asarray(a).tolist() for a in self.best_anchors_history],
+            "nfev": self.nfev,
+            "nit": self.nit,
+            "success": self.success,
+            "status": self.status,
+            "message": self.message,
+            "initial": [s.to_dict() for s in self.initial],
+            "finalists": [
+                {**f, "anchors": np.asarray(f["anchors"]).tolist()} for f in self.finalists
+            ],
+            "validation": self.validation,
+            "timings": self.timings,
+            "settings": self.settings,
+            "costs": None if self.pso is None else np.asarray(self.pso.costs).tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PlacementResult:
+        """The result read back from :meth:`to_dict` (e.g. a ``result.json``; JSON nulls
+        become NaN); the swarm's full record (``pso``) is not kept."""
+
+        def num(v):
+            return math.nan if v is None else float(v)
+
+        initial = [
+            InitialLayout(
+                s["name"],
+                np.asarray(s["anchors"], dtype=float),
+                num(s["mean_peb"]),
+                num(s.get("cost")),
+                num(s.get("table_cost")),
+            )
+            for s in d.get("initial", d.get("seeds", []))  # "seeds": earlier versions' files
+        ]
+        finalists = [
+            {
+                **f,
+                "anchors": np.asarray(f["anchors"], dtype=float),
+                "pso_cost": num(f.get("pso_cost")),
+                "cost": num(f.get("cost")),
+            }
+            for f in d.get("finalists", [])
+        ]
+        return cls(
+            room=Room.from_dict(d["room"]),
+            anchors=np.asarray(d["anchors"], dtype=float),
+            cost=num(d["cost"]),
+            cost_name=d["cost_name"],
+            cost_unit=d.get("cost_unit", cost_unit(d["cost_name"])),
+            history=[num(h) for h in d.get("history", [])],
+            best_anchors_history=[np.asarray(a) for a in d.get("best_anchors_history", [])],
+            nfev=int(d.get("nfev", 0)),
+            nit=int(d.get("nit", 0)),
+            success=bool(d.get("success", True)),
+            status=int(d.get("status", 0)),
+            message=d.get("message", ""),
+            initial=initial,
+            validation=d.get("validation", {}),
+            timings=d.get("timings", {}),
+            settings=d.get("settings", {}),
+            finalists=finalists,
+        )
+
+    def to_json(self, **kw) -> str:
+        """Strict JSON (non-finite numbers become null)."""
+        return json.dumps(to_jsonable(self.to_dict()), **kw)
