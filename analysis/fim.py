@@ -43,19 +43,24 @@ def _as_inputs(anchors, positions):
         raise ValueError(f"positions: expected shape (P, 3), got {p.shape}")
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(p))):
         raise ValueError("anchors/positions: must be finite (no NaN or inf)")
+    if a.shape[-2] == 0 or p.shape[0] == 0:
+        raise ValueError(
+            f"anchors/positions: need at least one of each, got {a.shape} and {p.shape}"
+        )
     return a, p
 
 
 #: the default range standard deviation σ (m) of the bounds, the PEB cost and the plan's
 #: reported PEB: the paper's constant σ (§IV)
 DEFAULT_SIGMA = 0.04
-#: the largest scalar σ (m) a plan, a cost or a command accepts
-MAX_SIGMA = 10.0
+#: the scalar range σ (m) the noise models, costs and commands accept: (low, high]
+SIGMA_RANGE = (0.0, 10.0)
 
 
 def check_sigma(value, name: str = "sigma") -> float:
-    """A scalar range σ (m), checked: in (0, :data:`MAX_SIGMA`]."""
-    return checks.real(name, value, low=0.0, high=MAX_SIGMA, low_open=True, unit="m")
+    """A scalar range σ (m), checked: in :data:`SIGMA_RANGE`, (0, 10] m."""
+    lo, hi = SIGMA_RANGE
+    return checks.real(name, value, low=lo, high=hi, low_open=True, unit="m")
 
 
 def _inverse_variance(sigma, batch: tuple[int, ...], P: int, M: int) -> tuple[np.ndarray, float]:

@@ -17,24 +17,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from analysis.fim import DEFAULT_SIGMA, check_sigma
 from simulation import checks
 from simulation.directivity import aim_vectors, cardioid
 from simulation.noise import check_snr
 from simulation.room import Room, as_room
 
 #: accepted constant range σ (m)
-SIGMA_RANGE = (0.0, 10.0)
 
 
 @dataclass(frozen=True)
 class ConstantRangeNoise:
     """σ_j(p) = ``value`` metres for every pair."""
 
-    value: float = 0.04
+    value: float = DEFAULT_SIGMA
 
     def __post_init__(self) -> None:
-        lo, hi = SIGMA_RANGE
-        v = checks.real("value", self.value, low=lo, high=hi, low_open=True, unit="m")
+        v = check_sigma(self.value, "value")
         object.__setattr__(self, "value", v)
 
     def sigma(self, anchors, positions) -> np.ndarray:
@@ -171,9 +170,15 @@ class PhysicalRangeNoise:
         return out
 
     def sigma(self, anchors, positions) -> np.ndarray:
-        """σ_j(p) in metres, (..., P, M); inf where the anchor is not :meth:`heard`."""
-        a = np.asarray(anchors, dtype=float)
-        p = np.asarray(positions, dtype=float)
+        """σ_j(p) in metres, (..., P, M); inf where the anchor is not :meth:`heard`.
+        Anchors (..., M, 3) and positions (P, 3) must lie in the room (a speaker outside it
+        has no SNR here): ``ValueError`` otherwise."""
+        a = checks.reals("anchors", anchors)
+        p = checks.reals("positions", positions)
+        if a.ndim < 2 or a.shape[-1] != 3:
+            raise ValueError(f"anchors: expected shape (..., M, 3), got {a.shape}")
+        self.room.check_anchors(a.reshape(-1, 3), min_anchors=1)
+        self.room.check_nodes(p)
         c = self.room.speed_of_sound
         d = np.linalg.norm(p[:, None, :] - a[..., None, :, :], axis=-1)
         amp = direct_amplitude(self.room, a, p)
@@ -206,9 +211,10 @@ def calibrated_sigma(
       outliers inflate it by about 1.2× their fraction).
 
     Pools realizations and nodes per anchor, returning (M,); with ``per_node=True`` pools
-    realizations only and returns (P, M) (input must be (R, P, M), R ≥ 2). σ = 0 (a
-    noise-free constant error) is returned as the smallest positive float so the result
-    can be used as ``sigma`` in :func:`analysis.fim` / :func:`analysis.peb`.
+    realizations only and returns (P, M) (input must be (R, P, M), R ≥ 2). Errors with no
+    spread (every error of an anchor the same, e.g. noise-free) have no σ to calibrate:
+    ``ValueError`` naming the anchors; a σ of 0 from a spread whose MAD is 0 (over half
+    the errors equal) is returned as the smallest positive float, usable as ``sigma``.
     """
     e = checks.reals("range_errors", range_errors)
     checks.choice("method", method, ("mad", "inlier"))
@@ -226,6 +232,13 @@ def calibrated_sigma(
         raise ValueError("range_errors: must be finite")
     if x.size == 0:
         raise ValueError(f"range_errors: no errors to calibrate from (shape {e.shape})")
+    flat = np.ptp(x, axis=0) == 0
+    if np.any(flat):
+        which = np.flatnonzero(flat if flat.ndim == 1 else flat.any(axis=0))
+        raise ValueError(
+            f"range_errors: anchor(s) {[int(j) for j in which]} have no spread (every error the "
+            "same), so there is no σ to calibrate; simulate with noise"
+        )
     med = np.median(x, axis=0)
     sigma = MAD_TO_SIGMA * np.median(np.abs(x - med), axis=0)
     if method == "inlier":
@@ -301,8 +314,7 @@ class MultipathRangeNoise:
     def __post_init__(self) -> None:
         if not isinstance(self.room, Room):
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
-        lo, hi = SIGMA_RANGE
-        floor = checks.real("floor", self.floor, low=lo, high=hi, low_open=True, unit="m")
+        floor = check_sigma(self.floor, "floor")
         object.__setattr__(self, "floor", floor)
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
 

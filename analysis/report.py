@@ -43,8 +43,8 @@ from typing import Any
 import numpy as np
 
 from analysis.coverage import bound
+from analysis.fim import DEFAULT_SIGMA
 from analysis.report_data import (
-    DEFAULT_SIGMA,
     Context,
     Figure,
     Report,

@@ -20,7 +20,6 @@ from simulation.statistics import dop, dop_rms, error_stats, node_rmse
 
 RESULT_FILE = "result.json"
 EVALUATION_FILE = "evaluation.json"
-DEFAULT_SIGMA = 0.04
 #: the statistics of the simulated errors the report shows, as in ``error_stats``
 SHOWN_STATS = ("std", "mean", "p95", "rms")
 

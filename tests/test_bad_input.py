@@ -614,3 +614,21 @@ def test_reference_nodes_names_grid_shape_and_cardioid_refuses_none():
 
     refused("grid_shape", lambda: reference_nodes(ROOM, A, grid_shape=(0, 1, 1)))
     refused("cos_theta", lambda: cardioid(None))
+
+
+def test_the_small_defects_of_issue_29_raise_value_errors():
+    """An empty layout has no bound, a speaker outside the room no SNR, errors without
+    spread no σ; ranges beyond 100 km are no indoor measurement. (Ranges down to −1 m stay
+    accepted: the paper's receiver reports noisy picks slightly before the direct path.)"""
+    from simulation.positioning import locate
+
+    P = ROOM.grid()[:3]
+    refused("anchors", lambda: analysis.peb(np.zeros((0, 3)), P))
+    outside = np.array([[9.0, 1.0, 1.0], *A[1:]])
+    refused("anchors", lambda: analysis.PhysicalRangeNoise(ROOM).sigma(outside, P))
+    refused("range_errors",
+            lambda: analysis.CalibratedRangeNoise.from_range_errors(np.zeros((10, 4))))  # fmt: skip
+    refused("ranges", lambda: locate(A, np.full((1, 4), 1e300)))
+    assert np.isfinite(locate(A, np.full((1, 4), -0.3))).all()
+    with pytest.raises(TypeError):  # sweep has one seed keyword: rng
+        placement.sweep(ROOM, [4], seed=1)

@@ -149,8 +149,15 @@ def test_peb_is_linear_in_sigma_over_the_whole_float_range(sigma):
     np.testing.assert_allclose(got, sigma * analysis.gdop(a, nodes), rtol=1e-12)
 
 
-def test_a_noise_free_calibrated_sigma_gives_a_tiny_bound_not_inf():
-    sigma = analysis.calibrated_sigma(np.zeros((3, 10, 4)))  # the smallest positive float
+def test_a_zero_robust_sigma_gives_a_tiny_bound_not_inf():
+    """Over half the errors equal (MAD 0, yet a spread): σ is the smallest positive float,
+    and the bound stays finite; errors without any spread are refused."""
+    e = np.zeros((3, 10, 4))
+    e[0, 0] = 0.01
+    sigma = analysis.calibrated_sigma(e)
+    assert np.all(sigma == np.finfo(float).tiny)
     room = Room.techtile()
     got = analysis.peb(room.corners_layout(), room.grid()[::27], sigma)
     assert np.all(np.isfinite(got)) and np.all(got < 1e-300)
+    with pytest.raises(ValueError, match="no spread"):
+        analysis.calibrated_sigma(np.zeros((3, 10, 4)))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from analysis import bound, error_stats
-from analysis.noise import SIGMA_RANGE
+from analysis.fim import DEFAULT_SIGMA, check_sigma
 from placement.cli.common import (
     add_room_argument,
     describe_room,
@@ -25,7 +25,9 @@ def register(sub) -> None:
     )
     p.add_argument("--layout", metavar="L.json", help="layout file (default: corners layout)")
     add_room_argument(p)
-    p.add_argument("--sigma", type=float, default=0.04, help="range sigma in metres (0.04)")
+    p.add_argument(
+        "--sigma", type=float, default=DEFAULT_SIGMA, help="range sigma in metres (0.04)"
+    )
     p.add_argument("--out", metavar="FILE.json", help="also write the statistics as JSON")
     p.set_defaults(func=run)
 
@@ -34,8 +36,7 @@ def run(args) -> int:
     """Run ``anchorplan bounds`` on parsed ``args``; the exit status (0: done)."""
     if args.out is not None:
         output_file("--out", args.out)
-    lo, hi = SIGMA_RANGE
-    checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+    check_sigma(args.sigma, "--sigma")
     room = load_room(args.room, args)
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()

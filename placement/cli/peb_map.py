@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from analysis.fim import DEFAULT_SIGMA
 from placement.cli.common import add_room_argument, load_layout, load_room, output_file
 from simulation import checks
 
@@ -26,7 +27,9 @@ def register(sub) -> None:
     )
     p.add_argument("--layout", metavar="L.json", help="layout file (default: corners layout)")
     add_room_argument(p)
-    p.add_argument("--sigma", type=float, default=0.04, help="range sigma in metres (0.04)")
+    p.add_argument(
+        "--sigma", type=float, default=DEFAULT_SIGMA, help="range sigma in metres (0.04)"
+    )
     p.add_argument(
         "--height", type=float, action="append", metavar="Z", help="slice height in m (repeat)"
     )
@@ -46,11 +49,10 @@ def register(sub) -> None:
 def run(args) -> int:
     """Run ``anchorplan peb-map`` on parsed ``args``; the exit status (0: done)."""
     from analysis import figures
-    from analysis.noise import SIGMA_RANGE
+    from analysis.fim import check_sigma
 
     out = output_file("--out", args.out, suffixes=(".png", ".svg", ".pdf"))
-    lo, hi = SIGMA_RANGE
-    checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+    check_sigma(args.sigma, "--sigma")
     checks.real("--resolution", args.resolution, low=0.0, low_open=True, unit="m")
     checks.real("--dpi", args.dpi, low=DPI_RANGE[0], high=DPI_RANGE[1])
     if args.vmax is not None:

@@ -35,7 +35,10 @@ def register(sub) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="seed of those simulations (0)")
     p.add_argument(
-        "--sigma", type=float, default=None, help="range sigma of the PEB in m (plan's, 0.04)"
+        "--sigma",
+        type=float,
+        default=None,
+        help="range sigma of the PEB in m (the plan's, else 0.04)",
     )
     p.add_argument("--dpi", type=float, default=100, help="resolution of the figures (100)")
     p.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG here")
@@ -44,7 +47,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan report`` on parsed ``args``; the exit status (0: done)."""
-    from analysis.noise import SIGMA_RANGE
+    from analysis.fim import check_sigma
     from analysis.report import write_report
     from analysis.report_data import load_results, main_anchors, room_of
     from placement.surfaces import naive_layout
@@ -60,8 +63,7 @@ def run(args) -> int:
     checks.count("--seed", args.seed, low=0)
     checks.real("--dpi", args.dpi, low=DPI_RANGE[0], high=DPI_RANGE[1])
     if args.sigma is not None:
-        lo, hi = SIGMA_RANGE
-        checks.real("--sigma", args.sigma, low=lo, high=hi, low_open=True, unit="m")
+        check_sigma(args.sigma, "--sigma")
     if (result_dir / "sweep.json").is_file() and not (result_dir / "result.json").exists():
         return _sweep_report(result_dir, args)
     try:
