@@ -80,7 +80,7 @@ def run(room, M, seed, args, ex, unseeded=False) -> dict:
         ),
         "search_result": dict(res.settings.get("search_result", {})),
         "timings": res.timings,
-        "nfev_by_phase": res.settings["nfev_by_phase"],
+        "nfev_by_phase": {k: p["nfev"] for k, p in res.phases.items()},
         "seconds": seconds,
     }
     if res.initial:

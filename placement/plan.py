@@ -117,6 +117,16 @@ def seed_then_pso(
     return planner.solve()
 
 
+#: what each phase's evaluations count (``PlacementResult.phases``)
+COUNTS = {
+    "search": "table layouts scored",
+    "initial": "evaluations",
+    "pso": "cost evaluations (simulations for a simulated cost)",
+    "refinement": "table layouts scored",
+    "finalists": "draw simulations",
+    "validation": "noise realizations (grid, held-out grid and points, mounting draws)",
+}
+
 #: the swarm of ``seed_then_pso`` for a simulated cost: the starting layouts and a particle
 #: started around them, scored on fresh draws; one iteration, what the swarm contributes
 #: (docs/model.md, "Particle swarm optimization")
@@ -319,7 +329,10 @@ class Planner:
                 nodes=self.nodes, sigma=self.sigma, executor=self.executor, progress=bar.update,
             )  # fmt: skip
             bar.close()
-        self._lap("validation")
+        v = self.validation
+        mounting = self.search.mount_tolerance > 0 and v.mount_draws
+        n = v.realizations + 2 * v.held_out_realizations + (v.mount_draws if mounting else 0)
+        self._lap("validation", n if self.validation_result else 0)
 
     def result(self) -> PlacementResult:
         """The run's :class:`PlacementResult`."""
@@ -328,7 +341,8 @@ class Planner:
         return PlacementResult(
             room=self.room, anchors=self.anchors, cost=self.chosen_cost, cost_name=self.label,
             cost_unit=cost_unit(self.label), history=res.history,
-            best_anchors_history=res.best_anchors_history, nfev=res.nfev, nit=res.nit,
+            best_anchors_history=res.best_anchors_history, nit=res.nit,
+            nfev=sum(p["nfev"] for p in self.phases().values()), phases=self.phases(),
             success=success, status=0 if success else 1,
             message=res.message if success else "no usable layout: " + res.message,
             initial=self.initial_layouts, validation=self.validation_result,
@@ -382,7 +396,13 @@ class Planner:
             "validation": dataclasses.asdict(self.validation),
             "sigma": self.sigma,
             "reach": self.reach,
-            "nfev_by_phase": dict(self.nfev),
+        }
+
+    def phases(self) -> dict[str, dict[str, Any]]:
+        """Per phase run: its seconds, its evaluations and what they count."""
+        return {
+            name: {"seconds": seconds, "nfev": self.nfev.get(name, 0), "counts": COUNTS[name]}
+            for name, seconds in self.seconds.items()
         }
 
     def _lap(self, phase: str, nfev: int | None = None) -> None:

@@ -34,8 +34,11 @@ class PlacementResult(LayoutResult):
     ``cost``; the chosen one has the lowest); initial the swarm's starting layouts with
     their costs;
     validation the checks of :func:`placement.validation.validate_layout`; timings the
-    seconds of every phase and ``total``; settings every setting of the run and
-    ``nfev_by_phase``. ``to_dict()`` is the ``result.json`` format and
+    seconds of every phase and ``total``; phases per phase its ``seconds``, its
+    evaluations ``nfev`` and what it counts (``counts``: table layouts scored, swarm
+    simulations, draw simulations, validation realizations); nfev their sum; nit the
+    swarm's iterations; settings every setting of the run. ``to_dict()`` is the
+    ``result.json`` format and
     :meth:`from_dict` reads it back.
     """
 
@@ -60,6 +63,7 @@ class PlacementResult(LayoutResult):
     settings: dict[str, Any]
     pso: PSOResult | None = field(default=None, repr=False)
     finalists: list[dict[str, Any]] = field(default_factory=list)
+    phases: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
     def availability(self) -> float:
@@ -90,6 +94,7 @@ class PlacementResult(LayoutResult):
             ],
             "validation": self.validation,
             "timings": self.timings,
+            "phases": self.phases,
             "settings": self.settings,
             "costs": None if self.pso is None else np.asarray(self.pso.costs).tolist(),
         }
@@ -137,6 +142,7 @@ class PlacementResult(LayoutResult):
             initial=initial,
             validation=d.get("validation", {}),
             timings=d.get("timings", {}),
+            phases=d.get("phases", {}),
             settings=d.get("settings", {}),
             finalists=finalists,
         )

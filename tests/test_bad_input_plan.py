@@ -55,7 +55,7 @@ def test_seed_then_pso_counts_and_numbers(name, make):
 def test_options_are_honoured_not_overridden_by_the_defaults():
     kw = {k: v for k, v in TINY.items() if k != "swarm"}
     res = seed_then_pso(ROOM, 4, swarm=PSOOptions(particles=4, iterations=2), **kw)
-    assert res.nfev == 8 and res.settings["swarm"]["particles"] == 4
+    assert res.phases["pso"]["nfev"] == 8 and res.settings["swarm"]["particles"] == 4
 
 
 def test_options_must_be_pso_options():

@@ -26,7 +26,7 @@ def test_plan_end_to_end_with_search_and_simulated_cost(tmp_path, capsys):
     anchors = np.array(layout["anchors"])
     np.testing.assert_array_equal(anchors, np.array(res["anchors"]))
     assert placement.on_surfaces(room, anchors).all()
-    assert res["cost_name"] == "variance" and res["nfev"] == 8
+    assert res["cost_name"] == "variance" and res["phases"]["pso"]["nfev"] == 8
     assert res["initial"][0]["name"] == "search-1"
     assert res["settings"]["search_result"]["nfev"] > 0
     # the finalists were scored on fresh draws and the lowest one is the answer

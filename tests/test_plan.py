@@ -73,8 +73,9 @@ def test_seed_then_pso_simulated_chain_and_its_phases():
     assert res.success and placement.on_surfaces(ROOM, res.anchors).all()
     assert [s.name for s in res.initial][:1] == ["search-1"]
     assert set(res.timings) >= {"search", "pso", "finalists", "validation", "total"}
-    n = res.settings["nfev_by_phase"]
-    assert n["search"] > 0 and n["pso"] == res.nfev == 8
+    n = {k: p["nfev"] for k, p in res.phases.items()}
+    assert n["search"] > 0 and n["pso"] == 8 and res.nfev == sum(n.values())
+    assert n["validation"] == 2 + 2 * 1 + 2  # grid, held-out grid and points, mounting
     v = res.validation
     assert v["realizations"] == 2 and np.shape(v["errors"]) == (2, len(NODES))
     assert v["std"] == pytest.approx(np.std(v["errors"]), abs=1e-5)
@@ -138,7 +139,7 @@ def test_same_result_serially_and_with_an_executor():
 
 def test_the_swarm_options_are_honoured_and_checked():
     res = _plan(swarm=placement.PSOOptions(4, 2))
-    assert res.nfev == 8 and res.settings["swarm"]["particles"] == 4
+    assert res.phases["pso"]["nfev"] == 8 and res.settings["swarm"]["particles"] == 4
     with pytest.raises(ValueError, match="^swarm: must be a PSOOptions"):
         _plan(swarm={"particles": 4})
     with pytest.raises(ValueError, match=r"^finalists.count: must be an integer in \[1, 4\]"):

@@ -279,7 +279,8 @@ def _print_result(res, args) -> None:
     if extra.get("resumed_from") is not None:
         print(f"resumed from checkpoint {args.checkpoint} after iteration {extra['resumed_from']}")
     its = "iteration" if res.nit == 1 else "iterations"
-    print(f"swarm: {res.nit} {its}, {res.nfev} evaluations, {res.message}")
+    swarm_nfev = res.phases.get("pso", {}).get("nfev", 0)
+    print(f"swarm: {res.nit} {its}, {swarm_nfev} evaluations, {res.message}")
     if swarm is not None and swarm.failures:
         print(
             f"  {swarm.failures} evaluation(s) failed and cost inf: "
@@ -331,17 +332,8 @@ def _num(x) -> str:
 
 
 def _print_phases(res) -> None:
-    nfev = res.settings.get("nfev_by_phase", {})
-    what = {
-        "search": "table layouts",
-        "pso": "simulations",
-        "refinement": "table layouts",
-        "finalists": "draw simulations",
-    }
     parts = []
-    for phase, seconds in res.timings.items():
-        if phase == "total":
-            continue
-        n = f" ({nfev[phase]} {what.get(phase, 'evaluations')})" if phase in nfev else ""
-        parts.append(f"{phase} {seconds:.1f} s{n}")
+    for phase, p in res.phases.items():
+        n = f" ({p['nfev']} {p['counts'].split(' (')[0]})" if p["nfev"] else ""
+        parts.append(f"{phase} {p['seconds']:.1f} s{n}")
     print("phases: " + ", ".join(parts) + f"; total {res.timings['total']:.1f} s")
