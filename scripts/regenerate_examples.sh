@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Regenerate every committed example under docs/examples/ (and the README's images made from
+# them) with the current code, as the README describes them. About 25 minutes on 2 cores.
+# tests/test_examples.py checks that the small example docs/examples/quick still matches.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+AP="${ANCHORPLAN:-anchorplan}"
+E=docs/examples
+
+# the small example the tests re-plan (a coarse search; half a minute)
+$AP plan --anchors 4 --search-spacing 1.0 --search-chains 2 --search-evaluations 300 \
+    --validate-realizations 5 --no-progress --out $E/quick
+
+# the README command's plan, with its report, DXF, what-if tables and mounting sheet
+$AP plan --anchors 8 --no-progress --out $E/techtile
+$AP report $E/techtile
+$AP export $E/techtile --dxf $E/techtile/plan.dxf
+$AP stress $E/techtile
+$AP sheet $E/techtile --out $E/techtile/sheet
+
+# the office: keep-outs and tag zones
+$AP plan --room examples/office.toml --anchors 8 --no-progress --out $E/office
+$AP report $E/office --realizations 0 --figures $E/office/figures
+$AP export $E/office --dxf $E/office/plan.dxf
+$AP stress $E/office
+$AP sheet $E/office --out $E/office/sheet
+
+# real rooms: an L-shaped lab with columns, a warehouse with racks
+for ex in l-shaped-lab:8 warehouse-aisles:10; do
+  name=${ex%:*}; M=${ex#*:}
+  $AP plan --room examples/$name.toml --anchors $M --no-progress --out $E/$name
+  $AP report $E/$name --realizations 0 --figures $E/$name/figures
+  $AP sheet $E/$name --out $E/$name/sheet
+done
+
+# how many anchors
+$AP sweep --anchors 4-10 --target-p95 1.8 --no-progress --out $E/sweep
+$AP report $E/sweep
