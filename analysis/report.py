@@ -54,7 +54,7 @@ from analysis.report_data import (
     room_of,
     sim_from_evaluation,
 )
-from simulation import checks
+from simulation import streams
 
 logger = logging.getLogger(__name__)
 
@@ -143,7 +143,7 @@ def build_report(
     """
     if int(realizations) != realizations or realizations < 0:
         raise ValueError(f"realizations: must be an integer >= 0, got {realizations}")
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     t0 = time.perf_counter()
     ctx = _context(result_dir, sigma, int(realizations), comparisons)
     _simulate_missing(ctx, seed)

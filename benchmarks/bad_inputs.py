@@ -521,7 +521,7 @@ def _bound_and_projection_cases() -> None:
             4,
             **{**PLAN_KW, "swarm": PSOOptions(particles=4, iterations=2)},
         )
-        from simulation.checks import geometry
+        from simulation.degeneracy import geometry
 
         return (not res.success) or geometry(res.anchors) not in ("collinear", "coincident")
 

@@ -2,7 +2,7 @@
 
 Run: python benchmarks/bench_receiver.py --layout techtile=paper:DIR [--layout ...]
         [--windows 1 2 5 10 20 30] [--picks paper first-path] [--realizations 2]
-        [--field-draws 10] [--seed 0]
+        [--field-draws 10] [--seed 0] [--own]
      python benchmarks/bench_receiver.py --peer 40 [--windows 20]
 
 Each ``--layout ROOM=NAME:DIR`` names a planned layout (``DIR/layout.json`` from
@@ -10,7 +10,8 @@ Each ``--layout ROOM=NAME:DIR`` names a planned layout (``DIR/layout.json`` from
 techtile box with every surface at α = 0.2, ``examples/ordinary-room.toml``); NAME says
 for which receiver it was planned (``paper``: the paper's 1 ms window and pick, so the
 layout a user of the paper's design has; or the design's label, e.g. ``20ms-first-path``,
-for the co-designed layout). Every layout is evaluated under every receiver design:
+for the co-designed layout). Every layout is evaluated under every receiver design (with
+``--own``, a co-designed layout under its own design only):
 
 - a window of W ms (N = W · 192 samples at 192 kHz) that ends with the chirp (t_wake =
   30 ms − W, so 1 ms is the paper's window, 30 ms opens with the chirp);
@@ -127,6 +128,12 @@ def main() -> None:
     ap.add_argument("--realizations", type=int, default=2)
     ap.add_argument("--field-draws", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument(
+        "--own",
+        action="store_true",
+        help="evaluate a layout named after a design (e.g. 20ms-first-path) under that design "
+        "only; layouts named paper under every design",
+    )
     args = ap.parse_args()
     if args.peer:
         peer(args.peer, args.windows, args.picks, args.seed)
@@ -139,6 +146,8 @@ def main() -> None:
         anchors = np.array(json.load(open(f"{folder}/layout.json"))["anchors"])
         for w in args.windows:
             for pick in args.picks:
+                if args.own and name != "paper" and name != f"{w:g}ms-{pick}":
+                    continue
                 sig = design(w, pick)
                 room = dataclasses.replace(ROOMS[room_name], signal=sig)
                 t0 = time.perf_counter()

@@ -6,7 +6,8 @@ Run: python benchmarks/plot_receiver.py docs/benchmarks/receiver.jsonl \
 Two rows (the paper's 270 nodes; the field figure: random tag points, anchors mounted
 within 3 cm), one column per room: the median (solid) and P95 (dashed) error against the
 window length, one colour per pick, circles for the layout planned for the paper's
-receiver and squares for the layout planned for the 20 ms first-path receiver.
+receiver and squares for the layout planned for the receiver it is evaluated with (or,
+from a run without ``--own``, for the design its name gives).
 """
 
 import json
@@ -16,6 +17,14 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+
+def _series(row: dict) -> str:
+    """The row's layout: "paper", "own" (planned for the design it is evaluated under) or
+    the name of the design it was planned for."""
+    if row["layout"] == f"{row['window_ms']:g}ms-{row['pick']}":
+        return "own"
+    return row["layout"]
 
 
 def main(src: str, dst: str) -> None:
@@ -28,18 +37,20 @@ def main(src: str, dst: str) -> None:
         panels = (("nodes270", "the paper's 270 nodes"), ("field", "field: random tags, 3 cm"))
         for row, (key, title) in enumerate(panels):
             ax = axes[row, col]
-            for layout in sorted({r["layout"] for r in rows if r["room"] == room}):
+            for layout in sorted({_series(r) for r in rows if r["room"] == room}):
                 for pick, colour in colours.items():
                     pts = sorted(
                         (r["window_ms"], r[key]["median"], r[key]["p95"])
                         for r in rows
-                        if r["room"] == room and r["layout"] == layout and r["pick"] == pick
+                        if r["room"] == room and _series(r) == layout and r["pick"] == pick
                     )
                     if not pts:
                         continue
                     w, med, p95 = zip(*pts, strict=True)
                     m = markers.get(layout, "s")
-                    who = "the paper's receiver" if layout == "paper" else layout
+                    who = {"paper": "the paper's receiver", "own": "that receiver"}.get(
+                        layout, layout
+                    )
                     lab = f"{pick} pick, layout planned for {who}"
                     ax.plot(w, med, "-", marker=m, color=colour, label=lab, alpha=0.85)
                     ax.plot(w, p95, "--", marker=m, color=colour, alpha=0.5)

@@ -19,7 +19,7 @@ import numpy as np
 
 from placement.serialization import to_jsonable
 from placement.surfaces import MAX_ANCHORS
-from simulation import checks
+from simulation import checks, streams
 from simulation.room import Room, room_or_default
 
 
@@ -173,7 +173,7 @@ def sweep(
     kw = {"cost": cost, "initial": initial, "search": search, "swarm": swarm,
           "finalists": finalists, "validation": validation, "nodes": nodes,
           "executor": executor, "progress": progress}  # fmt: skip
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     planners = [Planner(room, M, rng=seed, **kw) for M in counts]  # every argument checked
     first = planners[0]
     t0 = time.perf_counter()

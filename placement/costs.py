@@ -17,7 +17,7 @@ import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
 from placement.rangetable import check_mount_tolerance, range_table, table_errors
-from simulation import checks
+from simulation import checks, degeneracy
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
 
@@ -116,7 +116,7 @@ class DrawsCost:
         return table_errors(table, np.arange(len(a))[None])[0]
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
-        if checks.anchor_rank(anchors) < 2:  # collinear: the position is not determined
+        if degeneracy.anchor_rank(anchors) < 2:  # collinear: the position is not determined
             return math.inf
         return SIMULATED_STATISTICS[self.statistic](self.errors(anchors))
 

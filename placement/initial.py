@@ -26,7 +26,7 @@ from placement.serialization import fingerprint, write_json_atomic
 from placement.simselect import SearchOptions
 from placement.streams import phase_seed
 from placement.surfaces import random_layout
-from simulation import checks
+from simulation import streams
 from simulation.room import Room
 
 logger = logging.getLogger(__name__)
@@ -69,7 +69,7 @@ def analytic_initial(
     from placement.relaxation import relax_select
 
     nodes = room.grid() if nodes is None else nodes
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     out: list[InitialLayout] = []
 
     def add(name, anchors):
@@ -148,7 +148,7 @@ def search_initial(
     from placement import simselect
 
     sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     origin = seed if callable(table) else [table.seed, list(table.ranges.shape)]
     print_ = _search_fingerprint(room, M, options, statistic, nodes, origin)
     if sidecar is not None and sidecar.exists():

@@ -52,7 +52,7 @@ from placement.streams import phase_seed
 from placement.surfaces import MAX_ANCHORS, project
 from placement.validation import ValidationOptions, validate_layout
 from placement.workers import executor_workers
-from simulation import checks
+from simulation import checks, degeneracy, streams
 from simulation.room import Room, room_or_default
 from simulation.statistics import cost_unit
 
@@ -181,7 +181,7 @@ class Planner:
         self.nodes = None if nodes is None else room.check_nodes(nodes)
         self.cost_fn = make_cost(cost, room, nodes=self.nodes)
         self.sigma = float(getattr(self.cost_fn, "sigma", DEFAULT_SIGMA))
-        self.seed = checks.entropy("rng", rng)
+        self.seed = streams.entropy("rng", rng)
         self.executor, self.workers = executor, executor_workers(executor)
         self.checkpoint = (
             None if checkpoint is None else checks.output_path("checkpoint", checkpoint)
@@ -442,7 +442,7 @@ def _check_table(table, mount_tolerance: float):
 
 
 def _degenerate(anchors) -> bool:
-    return checks.geometry(anchors) in ("collinear", "coincident")
+    return degeneracy.geometry(anchors) in ("collinear", "coincident")
 
 
 def reach_check(room: Room, nodes=None) -> dict[str, Any]:

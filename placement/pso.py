@@ -37,7 +37,7 @@ from placement.result import LayoutResult
 from placement.serialization import fingerprint, write_json_atomic
 from placement.surfaces import MAX_ANCHORS, project, random_layout
 from placement.workers import ExecutorBroken, WorkerPool, executor_workers
-from simulation import checks
+from simulation import checks, degeneracy, streams
 from simulation.room import Room, as_room
 
 logger = logging.getLogger(__name__)
@@ -170,7 +170,7 @@ def nfev_to_reach(costs, target: float) -> int | None:
 
 def evaluation_rng(seed: int, iteration: int, particle: int) -> np.random.Generator:
     """The noise stream of particle ``particle`` at ``iteration`` for a run seeded ``seed``."""
-    return checks.stream(seed, 1, iteration, particle)
+    return streams.stream(seed, 1, iteration, particle)
 
 
 def _can_alarm() -> bool:
@@ -211,7 +211,7 @@ def _evaluate_chunk(
             out.append((c if math.isfinite(c) else math.inf, None))
         except Exception as exc:  # noqa: BLE001 - one bad particle must not stop the run
             out.append((math.inf, f"{type(exc).__name__}: {exc}"))
-        if len(a) >= 3 and checks.anchor_rank(a) < 2:
+        if len(a) >= 3 and degeneracy.anchor_rank(a) < 2:
             out[-1] = (math.inf, out[-1][1])
     return out
 
@@ -442,7 +442,7 @@ class _Swarm:
             pcost=costs.copy(),
             gbest=x[best].copy(),
             gcost=float(costs[best]),
-            rng=checks.stream(seed, 0),
+            rng=streams.stream(seed, 0),
             history=[float(costs[best])],
             best_anchors_history=[x[best].tolist()],
             costs=[costs.tolist()],
@@ -676,7 +676,7 @@ def _check_args(
     cost = _check_cost(cost, executor)
     if chunksize is not None:
         chunksize = checks.count("chunksize", chunksize, low=1)
-    seed = None if rng is None else checks.entropy("rng", rng)
+    seed = None if rng is None else streams.entropy("rng", rng)
     progress = checks.flag("progress", progress)
     if callback is not None and not callable(callback):
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
@@ -729,7 +729,7 @@ def _start(room: Room, args: dict) -> _Swarm:
     """The first iteration: positions, velocities and their costs (checkpointed)."""
     seed, options = args["seed"], args["options"]
     entropy = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % 2**63)
-    init_rng = checks.stream(entropy, 2)
+    init_rng = streams.stream(entropy, 2)
     x = initial_positions(room, args["M"], args["initial"], options, init_rng)
     v = init_rng.uniform(-1, 1, size=x.shape) * options.init_velocity * np.array(room.size)
     counts = {"lost": 0, "timeouts": 0}

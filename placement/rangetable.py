@@ -37,7 +37,7 @@ import numpy as np
 
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
-from simulation import checks
+from simulation import checks, streams
 from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
@@ -110,7 +110,7 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
     staying in its region (:func:`node_region`; a node whose move would leave a polygonal
     floor plan or enter an obstacle stays where it is). Draw d moves by the stream (3, d) of the
     int seed ``rng`` (a Generator is drawn once)."""
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     p = np.asarray(nodes, dtype=float)
     half = cell_size(p) / 2
     lo, hi = node_region(room, p)
@@ -120,7 +120,7 @@ def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.nda
         if d < exact_draws:
             out[d] = p
         else:
-            move = checks.stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
+            move = streams.stream(seed, 3, d).uniform(-1.0, 1.0, p.shape) * half
             out[d] = np.clip(p + move, lo, hi)
             if not plain:  # a node that would leave the floor plan or enter an obstacle stays
                 stay = ~room.contains(out[d], margin=max(room.node_margin - 1e-9, 0.0))
@@ -149,7 +149,7 @@ def mounted_points(
     planned point moved in its surface plane by a uniform offset within a disc of radius
     ``tolerance`` (m), projected back onto the mounting surfaces; unchanged when ``exact``.
     Candidate j's offset comes from the stream (2, j, draw) of the int seed ``rng``."""
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     c = np.asarray(candidates, dtype=float)
     if exact or tolerance == 0:
         return c.copy()
@@ -157,7 +157,7 @@ def mounted_points(
     index = surface_index(room, c)
     out = c.copy()
     for row, (j, s) in enumerate(zip(ids, index, strict=True)):
-        u1, u2 = checks.stream(seed, 2, int(j), draw).random(2)
+        u1, u2 = streams.stream(seed, 2, int(j), draw).random(2)
         radius, angle = tolerance * np.sqrt(u1), 2 * np.pi * u2
         eu, ev = (surfs[int(s)].u_axis, surfs[int(s)].v_axis) if s >= 0 else (_X, _Y)
         out[row] += radius * np.cos(angle) * np.asarray(eu) + radius * np.sin(angle) * np.asarray(
@@ -188,7 +188,7 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
         noise = np.stack(
             [
                 dtype.type(s)
-                * checks.stream(spec["seed"], 0, int(j), d).standard_normal(
+                * streams.stream(spec["seed"], 0, int(j), d).standard_normal(
                     scene.windows.shape[::2], dtype=dtype
                 )
                 for s, j in zip(scene.noise_sigma, ids, strict=True)
@@ -239,7 +239,7 @@ def range_table(
     progress : an optional callable ``progress(done, total)`` called as chunks finish.
     """
     cand = room.check_anchors(candidates, min_anchors=1)
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     nodes = room.grid() if nodes is None else checks.reals("nodes", nodes)
     if nodes.ndim == 3 and len(nodes):  # explicit node sets: they set the draws
         nodes = np.stack([room.check_nodes(n) for n in nodes])

@@ -43,7 +43,7 @@ import numpy as np
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement.result import LayoutResult
 from placement.surfaces import allowed, allowed_rectangles, from_uv, mounting_surfaces, to_uv
-from simulation import checks
+from simulation import checks, streams
 from simulation.room import Room, as_room
 
 log = logging.getLogger(__name__)
@@ -342,7 +342,7 @@ def refine_peb(
     tol = checks.real("tol", tol, low=0.0, low_open=True)
     verbose = checks.flag("verbose", verbose)
     return_info = checks.flag("return_info", return_info)
-    rng = checks.rng("rng", rng)
+    rng = streams.rng("rng", rng)
     res = _refine(prob, multistart, rng, verbose, hessian, max_iter, tol, t0)
     return res if return_info else res.anchors
 

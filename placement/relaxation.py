@@ -63,7 +63,7 @@ from placement.selection import (
     node_values,
     subset_values,
 )
-from simulation import checks
+from simulation import checks, streams
 from simulation.room import Room
 
 log = logging.getLogger(__name__)
@@ -462,7 +462,7 @@ def relax_select(
     if solver_opts is not None:
         checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
         checks.known_keys("solver_opts", solver_opts, _solver_keys())
-    rng = checks.rng("rng", rng)
+    rng = streams.rng("rng", rng)
     G = inp.table()
     N, M = G.shape[1], inp.M
     wv, lam, solver_status, solver_value, compile_time, solve_time, info = _solve(

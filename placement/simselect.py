@@ -56,7 +56,7 @@ from placement.surfaces import (
     surface_index,
 )
 from placement.workers import run_jobs
-from simulation import checks
+from simulation import checks, streams
 from simulation.room import Room
 
 
@@ -350,7 +350,7 @@ def _finish(table, statistic, nbr, chains, seed):
     for k, c in chains:
         score = _Scorer(table, statistic, 10**9)
         f = float(score([c.best])[0])
-        S, f, local = descend(c.best, f, nbr, score, checks.stream(seed, 11, k))
+        S, f, local = descend(c.best, f, nbr, score, streams.stream(seed, 11, k))
         out.append((np.sort(S), f, local, c.nfev + score.nfev))
     return out
 
@@ -360,7 +360,7 @@ def _descents(table, statistic, nbr, layouts, seed, key):
     each with the stream of its number; [(S, cost, local, n)]."""
     out = []
     for i, S in layouts:
-        rng = checks.stream(seed, key, i)
+        rng = streams.stream(seed, key, i)
         score = _Scorer(table, statistic, 10**9)
         S, f, local = descend(S, float(score([S])[0]), nbr, score, rng)
         out.append((np.sort(S), f, local, score.nfev))
@@ -389,7 +389,7 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
     view = first_draws(table, n)
     chains = [
-        Chain.start(view, M, statistic, opt.random_starts, checks.stream(seed, 10, k))
+        Chain.start(view, M, statistic, opt.random_starts, streams.stream(seed, 10, k))
         for k in range(opt.chains)
     ]
     parts = _split(list(range(opt.chains)), max(1, workers))
@@ -457,7 +457,7 @@ def simulated_select(
     """
     opt = options or SearchOptions()
     M = checks.count("M", M, low=4, high=MAX_ANCHORS)
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     workers = checks.count("workers", workers, low=1, high=1024)
     t0 = time.perf_counter()
     if table is None:
@@ -496,7 +496,7 @@ def refine_on_table(
     [(anchors (M, 3), table cost, local)] per layout, the grown table and the layouts
     scored."""
     opt = options or SearchOptions()
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     current = [room.check_anchors(a) for a in layouts]
     out = [(a, math.inf, False) for a in current]
     nfev = 0

@@ -8,7 +8,7 @@ on any number of workers.
 
 from __future__ import annotations
 
-from simulation import checks
+from simulation import streams
 
 #: the streams of a run: the range table (whose node sets the swarm's draws share), the
 #: swarm's noise and mounting errors, the search's chains, the validation, the finalists'
@@ -27,4 +27,4 @@ STREAMS = {
 def phase_seed(seed: int, name: str) -> int:
     """The int seed of the stream ``name`` (:data:`STREAMS`) of the run with int seed
     ``seed``."""
-    return checks.substream(seed, STREAMS[name])
+    return streams.substream(seed, STREAMS[name])

@@ -27,7 +27,7 @@ import numpy as np
 
 from analysis.coverage import covered_share
 from placement.validation import mounted_errors, summary
-from simulation import checks
+from simulation import checks, streams
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.positioning import locate
 from simulation.room import Room, as_room
@@ -122,7 +122,7 @@ def stress(
     tolerances = [checks.real("tolerances", v, low=0.0, high=1.0, unit="m") for v in tolerances]
     for v in offsets:
         checks.real("temperature + offset", room.temperature + v, low=-40.0, high=60.0)
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     down = _anchor_down(room, a, nodes, R, seed)
     worst = max(range(len(a)), key=lambda j: (-down[j]["availability"], down[j]["mean"]))
     return StressResult(

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from simulation import checks
+from simulation import checks, streams
 from simulation.directivity import aim_vectors
 from simulation.mounting import MountingSurface, mounting_surfaces, regions
 from simulation.room import Room, as_room
@@ -277,7 +277,7 @@ def random_layout(room: Room, M: int, rng: np.random.Generator | int | None = No
     Within a surface the points are uniform over its allowed area (a cell of the allowed
     region is drawn with probability ∝ its area, then a point uniformly in it).
     """
-    rng = checks.rng("rng", rng)
+    rng = streams.rng("rng", rng)
     clo, chi, cidx = _room_regions(as_room(room))[0]
     out = []
     for i, (s, n) in enumerate(zip(mounting_surfaces(room), area_counts(room, M), strict=True)):

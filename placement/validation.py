@@ -27,7 +27,7 @@ import numpy as np
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
-from simulation import checks
+from simulation import checks, streams
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
 
@@ -160,7 +160,7 @@ def validate_layout(
     checks' parts finish.
     """
     opt = options or ValidationOptions()
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     mount_tolerance = check_mount_tolerance(mount_tolerance)
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
@@ -170,11 +170,11 @@ def validate_layout(
     child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
     # the grid check in two halves, each with its own stream, to keep two workers busy
     halves = [opt.realizations - opt.realizations // 2, opt.realizations // 2]
-    streams = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
+    halves_seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
     calls: dict[str, list] = {
         "grid": [
             (_evaluate, (room, a, nodes, R, s, opt.precision))
-            for R, s in zip(halves, streams, strict=True)
+            for R, s in zip(halves, halves_seeds, strict=True)
             if R > 0
         ]
     }

@@ -8,7 +8,9 @@ with one line naming the argument, the value given and what is allowed, e.g.
 
 Integer counts reject bools, strings and non-integral floats (3.0 is 3, 3.7 is an
 error); reals reject bools, strings, NaN and ±inf; sizes that would not fit in memory are
-refused from an estimate before anything is allocated (:func:`check_size`).
+refused from an estimate before anything is allocated (:func:`check_size`). The ``rng``
+arguments and random streams are :mod:`simulation.streams`'; the names of degenerate
+layouts :mod:`simulation.degeneracy`'s.
 """
 
 from __future__ import annotations
@@ -23,15 +25,12 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "anchor_rank",
     "check_size",
     "choice",
     "count",
     "describe",
     "distinct",
-    "entropy",
     "flag",
-    "geometry",
     "input_dir",
     "input_file",
     "inside",
@@ -40,12 +39,8 @@ __all__ = [
     "memory_limit",
     "output_path",
     "points",
-    "rank_of_spread",
     "real",
     "reals",
-    "rng",
-    "stream",
-    "substream",
 ]
 
 #: default share of the physical memory one array may take before it is refused
@@ -53,7 +48,6 @@ MEMORY_FRACTION = 0.5
 #: the distance (m) under which two anchors count as the same point
 MIN_ANCHOR_DISTANCE = 1e-3
 #: names of the affine ranks of a point set (:func:`geometry`)
-GEOMETRY = {0: "coincident", 1: "collinear", 2: "coplanar", 3: "3d"}
 
 
 # -- formatting -------------------------------------------------------------------------------
@@ -188,48 +182,6 @@ def choice(name: str, value: Any, allowed: Iterable[Any]) -> Any:
     raise ValueError(f"{name}: must be one of {options}, got {describe(value)}")
 
 
-def rng(name: str, value: Any) -> np.random.Generator:
-    """A numpy ``Generator`` from a Generator, BitGenerator, SeedSequence, a seed (int >= 0)
-    or None (fresh entropy), as :func:`numpy.random.default_rng` would; else ValueError."""
-    if isinstance(value, np.random.Generator):
-        return value
-    if value is None or isinstance(value, np.random.BitGenerator | np.random.SeedSequence):
-        return np.random.default_rng(value)
-    if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
-        if value >= 0:
-            return np.random.default_rng(int(value))
-    raise ValueError(
-        f"{name}: must be a numpy Generator, a seed (an integer >= 0) or None, "
-        f"got {describe(value)}"
-    )
-
-
-def stream(seed: int, *key: int) -> np.random.Generator:
-    """The random stream of an integer seed and a key path: ``Generator(PCG64(
-    SeedSequence(seed, spawn_key=key)))``. Every reproducible piece of work (a table
-    column, a chain, a particle's evaluation) draws from its own key, so results do not
-    depend on how the work is split."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=key)))
-
-
-def substream(seed: int, key: int) -> int:
-    """An integer seed derived from ``seed`` for the part ``key`` of a run."""
-    return int(np.random.SeedSequence(seed, spawn_key=(key,)).generate_state(1)[0])
-
-
-def entropy(name: str, value: Any) -> int:
-    """An integer seed (>= 0) standing for an ``rng`` argument: a seed is itself, so that
-    ``rng=s`` reproduces what ``seed=s`` did; a Generator (BitGenerator, SeedSequence)
-    gives one draw below 2**63; None gives fresh entropy (below 2**63). For functions that
-    derive several child streams from one seed (``SeedSequence(entropy).spawn(n)``)."""
-    if isinstance(value, int | np.integer) and not isinstance(value, bool | np.bool_):
-        if value >= 0:
-            return int(value)
-    if value is None:
-        return int(np.random.SeedSequence().entropy % 2**63)
-    return int(rng(name, value).integers(2**63))
-
-
 # -- collections ------------------------------------------------------------------------------
 def mapping(name: str, value: Any, what: str = "a mapping") -> Mapping:
     """``value`` if it is a mapping (dict, TOML table)."""
@@ -362,27 +314,6 @@ def distinct(name: str, pts: np.ndarray, min_distance: float = MIN_ANCHOR_DISTAN
             f"({np.round(p[i], 6).tolist()}); distinct anchors must be at least "
             f"{min_distance * 1000:g} mm apart"
         )
-
-
-def anchor_rank(anchors, tol: float = MIN_ANCHOR_DISTANCE) -> np.ndarray | int:
-    """Affine rank of anchors (M, 3) or of each layout (..., M, 3): 3 spans space, 2
-    coplanar, 1 collinear, 0 coincident; directions with an RMS spread under ``tol`` m
-    do not count."""
-    a = np.asarray(anchors, dtype=float)
-    c = a - a.mean(axis=-2, keepdims=True)
-    return rank_of_spread(np.linalg.svd(c, compute_uv=False), a.shape[-2], tol)
-
-
-def rank_of_spread(s, M: int, tol: float = MIN_ANCHOR_DISTANCE) -> np.ndarray | int:
-    """:func:`anchor_rank` from the singular values s (..., 3) of M anchors' coordinates
-    about their mean."""
-    r = np.sum(np.asarray(s) / math.sqrt(max(M, 1)) > tol, axis=-1)
-    return int(r) if np.ndim(r) == 0 else r
-
-
-def geometry(anchors, tol: float = MIN_ANCHOR_DISTANCE) -> str:
-    """ "3d", "coplanar", "collinear" or "coincident" for one layout (M, 3)."""
-    return GEOMETRY[int(anchor_rank(anchors, tol))]
 
 
 # -- memory -----------------------------------------------------------------------------------

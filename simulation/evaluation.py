@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.fft
 
-from simulation import checks, statistics
+from simulation import checks, degeneracy, statistics, streams
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.positioning import locate
@@ -111,7 +111,7 @@ class RangingScene:
         from ``rng``."""
         if not checks.flag("noise", noise):
             return self._to_ranges(self.windows)
-        return self._to_ranges(self.noisy_windows(checks.rng("rng", rng)))
+        return self._to_ranges(self.noisy_windows(streams.rng("rng", rng)))
 
     def ranges_batch(self, rngs, noise: bool = True) -> np.ndarray:
         """(len(rngs), P, M) ranges (NaN: no range), realization r drawn from ``rngs[r]``."""
@@ -146,7 +146,7 @@ def simulate_ranges(
     Anchors may be anywhere in the room (on the mounting surfaces or not) but at least
     1 mm apart; nodes must be inside the room.
     """
-    rng = checks.rng("rng", rng)
+    rng = streams.rng("rng", rng)
     room = as_room(room)
     checks.distinct("anchors", room.check_anchors(checks.reals("anchors", anchors), 1))
     scene = RangingScene(room, anchors, nodes, snr_db=snr_db, precision=precision)
@@ -221,7 +221,7 @@ class Evaluation:
         """The anchors' geometry: "3d", or "coplanar" (positions are mirror-ambiguous
         through the anchors' plane; the room box resolves it), "collinear" (the position
         is not determined: every fix is flagged unconverged)."""
-        return checks.geometry(self.anchors)
+        return degeneracy.geometry(self.anchors)
 
     @functools.cached_property
     def stats(self) -> dict:
@@ -412,7 +412,7 @@ def evaluate_layout(
     anchors = room.check_anchors(checks.reals("anchors", anchors))
     checks.distinct("anchors", anchors)
     realizations = checks.count("realizations", realizations, low=1)
-    seed = checks.entropy("rng", rng)
+    seed = streams.entropy("rng", rng)
     noise = checks.flag("noise", noise)
     bounded = checks.flag("bounded", bounded)
     max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from simulation import checks
+from simulation import checks, degeneracy
 
 logger = logging.getLogger(__name__)
 
@@ -196,7 +196,7 @@ def locate(
     x, cost, status, nit = _levenberg_marquardt(
         layouts, owner, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
     )
-    rank = np.atleast_1d(checks.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
+    rank = np.atleast_1d(degeneracy.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
     # collinear: rotation about the anchor line leaves the ranges unchanged
     status[(rank < 2)[owner]] = -1
     if np.any(partial):

@@ -11,7 +11,7 @@ from placement.plan import seed_then_pso
 from placement.pso import PSOOptions
 from placement.validation import ValidationOptions
 from simulation import Room
-from simulation.checks import geometry
+from simulation.degeneracy import geometry
 
 ROOM = Room.techtile()
 NODES = ROOM.grid()[::27]

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from simulation import checks
+from simulation import checks, degeneracy, streams
 
 NOT_NUMBERS = st.one_of(
     st.booleans(),
@@ -65,12 +65,12 @@ def test_messages_name_value_and_allowed():
 
 def test_rng():
     g = np.random.default_rng(1)
-    assert checks.rng("rng", g) is g
-    assert isinstance(checks.rng("rng", 5), np.random.Generator)
-    assert isinstance(checks.rng("rng", None), np.random.Generator)
+    assert streams.rng("rng", g) is g
+    assert isinstance(streams.rng("rng", 5), np.random.Generator)
+    assert isinstance(streams.rng("rng", None), np.random.Generator)
     for bad in (5.0, "5", True, -1, [1, 2], object()):
         with pytest.raises(ValueError, match="^rng: must be a numpy Generator"):
-            checks.rng("rng", bad)
+            streams.rng("rng", bad)
 
 
 def test_flag():
@@ -110,10 +110,10 @@ def test_geometry_checks():
         checks.distinct("candidates", np.vstack([big, big[:1]]))
     line = [[0, 0, 1], [1, 0, 1], [2, 0, 1], [3, 0, 1]]
     plane = [[0, 0, 1], [1, 0, 1], [0, 1, 1], [1, 1, 1]]
-    assert checks.geometry(line) == "collinear" and checks.geometry(plane) == "coplanar"
-    assert checks.geometry([[0, 0, 0]] * 4) == "coincident"
-    assert checks.geometry([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]) == "3d"
-    np.testing.assert_array_equal(checks.anchor_rank(np.array([line, plane])), [1, 2])
+    assert degeneracy.geometry(line) == "collinear" and degeneracy.geometry(plane) == "coplanar"
+    assert degeneracy.geometry([[0, 0, 0]] * 4) == "coincident"
+    assert degeneracy.geometry([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]) == "3d"
+    np.testing.assert_array_equal(degeneracy.anchor_rank(np.array([line, plane])), [1, 2])
 
 
 def test_check_size(monkeypatch):

@@ -98,12 +98,12 @@ def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws()
 
 
 def test_the_finalists_draws_are_new_noise_at_the_exact_nodes_unless_asked_otherwise():
-    from simulation import checks
+    from simulation import streams
 
     def fresh(draws, exact):
-        sets = node_draws(ROOM, NODES, draws, exact, checks.substream(0, 6))
+        sets = node_draws(ROOM, NODES, draws, exact, streams.substream(0, 6))
         return DrawsCost(ROOM, sets, exact_draws=exact, mount_tolerance=0.03,
-                         seed=checks.substream(0, 5))  # fmt: skip
+                         seed=streams.substream(0, 5))  # fmt: skip
 
     none = ValidationOptions(realizations=0)
     res = _plan(finalists=FinalistOptions(draws=3), validation=none)

@@ -12,7 +12,7 @@ from placement.cli.common import (
     output_file,
     write_json,
 )
-from simulation import checks
+from simulation import degeneracy
 
 
 def register(sub) -> None:
@@ -44,7 +44,7 @@ def run(args) -> int:
     stats = error_stats(values)
     print(f"room {room.name}: {describe_room(room)}")
     print(f"{len(anchors)} anchors, {len(nodes)} nodes, range sigma {args.sigma:g} m")
-    geometry = checks.geometry(anchors)
+    geometry = degeneracy.geometry(anchors)
     if geometry != "3d":
         print(f"note: the anchors are {geometry}")
     print("PEB = sqrt(tr J^-1) in metres over the grid, from the anchors each node hears:")
