@@ -197,6 +197,14 @@ def _headline(ctx: Context) -> list[str]:
     """Cards: σ / mean / P95 and mean PEB of the layout, σ of each comparison layout."""
     best = ctx.best
     cards = []
+    field = ((ctx.result or {}).get("validation") or {}).get("field")
+    if field:  # first: what the installation delivers where the tags go
+        what = f"tags anywhere, anchors within {100 * field['tolerance_m']:g} cm"
+        cards += [
+            (f"{_num(field['std'])} m", f"field σ ({what})"),
+            (f"{_num(field['mean'])} m", "field mean error"),
+            (f"{_num(field['p95'])} m", "field P95 error"),
+        ]
     if best.sim is not None:
         st = best.sim.stats
         cards += [

@@ -14,7 +14,7 @@ from analysis.paper import TABLE1
 
 
 def _num(v) -> str:
-    return "–" if v is None else f"{v:.3f}"
+    return "–" if v is None or v != v else f"{v:.3f}"
 
 
 def _share(v) -> str:
@@ -37,7 +37,8 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
             f"<b>Recommended: M = {data['recommended']}</b>, the smallest anchor count whose "
             f"validated {goal}."
         )
-    head = "<tr><th>M</th><th>σ (m)</th><th>mean (m)</th><th>P95 (m)</th><th>availability</th>"
+    head = "<tr><th>M</th><th>field σ / P95 (m)</th>"
+    head += "<th>σ (m)</th><th>mean (m)</th><th>P95 (m)</th><th>availability</th>"
     head += "<th>held-out σ (m)</th><th>mounting-error σ (m)</th><th>seconds</th>"
     head += "<th>paper σ / mean / P95 (m)</th></tr>" if paper else "</tr>"
     body = []
@@ -47,7 +48,9 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
             p = paper.get(r["M"])
             ref = f"<td>{p['std']} / {p['mean']} / {p['p95']}</td>" if p else "<td>–</td>"
         body.append(
-            f"<tr><td>{r['M']}</td><td>{_num(r['std'])}</td><td>{_num(r['mean'])}</td>"
+            f"<tr><td>{r['M']}</td>"
+            f"<td>{_num(r.get('field_std'))} / {_num(r.get('field_p95'))}</td>"
+            f"<td>{_num(r['std'])}</td><td>{_num(r['mean'])}</td>"
             f"<td>{_num(r['p95'])}</td><td>{_share(r.get('availability'))}</td>"
             f"<td>{_num(r['held_out_std'])}</td>"
             f"<td>{_num(r['mounting_std'])}</td><td>{r['seconds']:.0f}</td>{ref}</tr>"

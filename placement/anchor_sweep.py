@@ -27,8 +27,8 @@ from simulation.room import Room, room_or_default
 class SweepRow:
     """One anchor count: M, the validated σ, mean and P95 (m, over the fixes) and the
     availability at the evaluation nodes, the held-out and mounting-error σ / P95 (m) and
-    availabilities (NaN when not validated), the layout (M, 3) and the seconds its plan
-    took."""
+    availabilities, the field σ / mean / P95 (m; random tags and mounting error together)
+    (NaN when not validated), the layout (M, 3) and the seconds its plan took."""
 
     M: int
     std: float
@@ -43,6 +43,9 @@ class SweepRow:
     availability: float = math.nan
     held_out_availability: float = math.nan
     mounting_availability: float = math.nan
+    field_std: float = math.nan
+    field_mean: float = math.nan
+    field_p95: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """The row as plain JSON types (anchors as nested lists)."""
@@ -101,6 +104,7 @@ def _row(M: int, res, seconds: float) -> SweepRow:
     v = res.validation or {}
     held = (v.get("held_out") or {}).get("grid", {})
     mount = v.get("mounting") or {}
+    field = v.get("field") or {}
     nan = math.nan
     return SweepRow(
         M=M,
@@ -116,6 +120,9 @@ def _row(M: int, res, seconds: float) -> SweepRow:
         availability=v.get("availability", nan),
         held_out_availability=held.get("availability", nan),
         mounting_availability=mount.get("availability", nan),
+        field_std=field.get("std", nan),
+        field_mean=field.get("mean", nan),
+        field_p95=field.get("p95", nan),
     )
 
 

@@ -12,7 +12,11 @@ Three checks, each with its own independent noise:
   (in the zones when the room has zones);
 - **mounting error**: the anchors mounted at a random in-plane offset within
   ``mount_tolerance`` of their planned points (several draws), positions solved with the
-  planned points as an installed system would.
+  planned points as an installed system would;
+- **field**: what an installation delivers: in each draw, tags at uniform random points of
+  the tag zones (the room's node region without zones) and the anchors mounted within
+  ``mount_tolerance``, together, one noise realization; positions solved with the planned
+  points and bounded to the room, as for the mounting error.
 """
 
 from __future__ import annotations
@@ -41,6 +45,8 @@ class ValidationOptions:
     held_out_realizations : noise realizations at the held-out nodes (0: skip them).
     random_nodes : uniform random held-out points.
     mount_draws : mounting-error draws at the evaluation nodes (0: skip).
+    field_draws : draws of the field check (random tags and mounting error together;
+        0: skip), each of ``random_nodes`` tags.
     precision : the receiver DSP's precision.
     """
 
@@ -48,6 +54,7 @@ class ValidationOptions:
     held_out_realizations: int = 10
     random_nodes: int = 300
     mount_draws: int = 10
+    field_draws: int = 10
     precision: str = "float32"
 
     def __post_init__(self) -> None:
@@ -55,6 +62,7 @@ class ValidationOptions:
         checks.count("held_out_realizations", self.held_out_realizations, low=0, high=10_000)
         checks.count("random_nodes", self.random_nodes, low=1, high=100_000)
         checks.count("mount_draws", self.mount_draws, low=0, high=10_000)
+        checks.count("field_draws", self.field_draws, low=0, high=10_000)
         checks.choice("precision", self.precision, ("float64", "float32"))
 
 
@@ -134,6 +142,15 @@ def mounted_errors(
     return np.linalg.norm(x - nodes, axis=-1)
 
 
+def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None) -> np.ndarray:
+    """(tags,) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
+    random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
+    anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
+    the same draw), one noise realization."""
+    nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
+    return mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision, stream=1)
+
+
 def validate_layout(
     room: Room,
     anchors,
@@ -167,7 +184,7 @@ def validate_layout(
     out: dict[str, Any] = {}
     if opt.realizations == 0:
         return out
-    child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
+    child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(5)]
     # the grid check in two halves, each with its own stream, to keep two workers busy
     halves = [opt.realizations - opt.realizations // 2, opt.realizations // 2]
     halves_seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
@@ -189,6 +206,11 @@ def validate_layout(
         calls["mounting"] = [
             (mounted_errors, (room, a, nodes, mount_tolerance, d, child[0], opt.precision))
             for d in range(opt.mount_draws)
+        ]
+    if opt.field_draws:
+        calls["field"] = [
+            (field_errors, (room, a, opt.random_nodes, mount_tolerance, d, child[4], opt.precision))
+            for d in range(opt.field_draws)
         ]
     flat = [c for group in calls.values() for c in group]
     results = iter(run_calls(executor, flat, progress=progress))
@@ -227,6 +249,13 @@ def validate_layout(
             "draws": int(opt.mount_draws),
             **summary(errs),
         }
+    if "field" in jobs:
+        out["field"] = {
+            "draws": int(opt.field_draws),
+            "tags_per_draw": int(opt.random_nodes),
+            "tolerance_m": float(mount_tolerance),
+            **summary(np.concatenate(jobs["field"])),
+        }
     if out["availability"] < 1:
         out["message"] = (
             f"{100 * (1 - out['availability']):.2f} % of the node realizations have no fix "
@@ -237,4 +266,11 @@ def validate_layout(
     return out
 
 
-__all__ = ["ValidationOptions", "held_out_grid", "random_nodes", "validate_layout"]
+__all__ = [
+    "ValidationOptions",
+    "field_errors",
+    "held_out_grid",
+    "mounted_errors",
+    "random_nodes",
+    "validate_layout",
+]

@@ -203,3 +203,22 @@ def test_progress_bars_can_be_switched_off(capsys):
     err = capsys.readouterr().err
     for phase in ("range table", "search", "PSO", "finalists", "validation"):
         assert phase in err
+
+
+def test_the_field_check_draws_random_tags_and_mounting_error_together():
+    """The field figure: per draw, random tags (not the grid) with the anchors mounted
+    within the tolerance, one noise realization; reproducible from ``rng``."""
+    from placement.validation import field_errors, random_nodes, summary
+
+    a = ROOM.corners_layout()
+    opt = ValidationOptions(realizations=2, held_out_realizations=0, random_nodes=15,
+                            mount_draws=0, field_draws=3)  # fmt: skip
+    v = validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES)
+    child = np.random.SeedSequence(3).spawn(5)[4].generate_state(1)[0]
+    errors = np.concatenate([field_errors(ROOM, a, 15, 0.03, d, int(child)) for d in range(3)])
+    assert v["field"] == {"draws": 3, "tags_per_draw": 15, "tolerance_m": 0.03, **summary(errors)}
+    assert v["field"]["n"] == 45 and "mounting" not in v
+    assert validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES)["field"] == v["field"]
+    # the tags of a draw are random points of the node region, a new set per draw
+    t0 = random_nodes(ROOM, len(NODES), np.random.default_rng(0))
+    assert ROOM.contains(t0).all() and not np.allclose(t0, NODES)

@@ -304,6 +304,13 @@ def _print_result(res, args) -> None:
 def _print_validation(v: dict) -> None:
     if not v:
         return
+    f = v.get("field")
+    if f:  # first: what the installation delivers
+        print(
+            f"field ({f['draws']} draws of {f['tags_per_draw']} random tags, anchors mounted "
+            f"within {100 * f['tolerance_m']:g} cm): sigma {f['std']:.3f} m, mean "
+            f"{f['mean']:.3f} m, P95 {f['p95']:.3f} m" + availability_note(f)
+        )
     print(
         f"validation, {v['realizations']} realizations at the {len(v['per_node']['rmse'])} "
         f"nodes: sigma {v['std']:.3f} m, mean {v['mean']:.3f} m, P95 {v['p95']:.3f} m"

@@ -185,7 +185,9 @@ def _run_one(args, room, out):
 
 
 def _print_table(res, paper) -> None:
-    head = " M   sigma    mean     P95  availability  held-out sigma  mounting sigma"
+    head = (
+        " M   field sigma/P95   sigma    mean     P95  availability  held-out sigma  mounting sigma"
+    )
     print(head + ("   paper sigma/mean/P95" if paper else ""))
     for r in res.rows:
         ref = ""
@@ -193,7 +195,8 @@ def _print_table(res, paper) -> None:
             p = paper[r.M]
             ref = f"   {p['std']:.3f}/{p['mean']:.3f}/{p['p95']:.3f}"
         print(
-            f"{r.M:2d}  {r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}  {100 * r.availability:10.2f} %"
+            f"{r.M:2d}  {r.field_std:8.3f}/{r.field_p95:<7.3f}  "
+            f"{r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}  {100 * r.availability:10.2f} %"
             f"  {r.held_out_std:14.3f}  {r.mounting_std:14.3f}{ref}"
         )
     goal = f"availability >= {100 * res.target_availability:g} %"
