@@ -3,12 +3,13 @@ CSS and SVG only, laid out as A4 portrait pages.
 
 Pages, in the order an installer uses them: the ceiling plan (the floor plan seen from above
 with every anchor, the keep-outs and obstacles, the reference corner) with the conventions;
-the table of every anchor (25 rows a page); then one page per wall (or mountable obstacle
-face) that carries anchors: its elevation as seen from inside the room, the keep-outs and
-obstacles against it, each anchor with its dimension lines from the reference corner (along
-the wall) and from the floor, and that wall's rows of the table. Walls without anchors get
-no page (the plan page lists them). Every page is a fixed-size block that breaks before the
-next, so a browser prints exactly one sheet per page.
+the table of every anchor (25 rows a page); then one page per wall of the room, in corner
+order, and per mountable obstacle face that carries anchors: its elevation as seen from
+inside the room, the keep-outs and obstacles against it, each anchor with its dimension
+lines from the reference corner (along the wall) and from the floor, and that wall's rows
+of the table (a wall without anchors shows its keep-outs; the plan page lists such walls).
+Every page is a fixed-size block that breaks before the next, so a browser prints exactly
+one sheet per page.
 """
 
 from __future__ import annotations
@@ -292,11 +293,13 @@ def _page(title: str, sub: str, body: str) -> str:
 def render(room: Room, rows: list[Mount], frames: dict[str, VerticalFrame], *, title: str) -> str:
     """The sheet's HTML (module docstring) for the mounts ``rows`` in ``room``, whose
     vertical surfaces are ``frames`` (by name)."""
-    on_wall = {}
+    # every wall of the room gets a page (its keep-outs, even without anchors), in corner
+    # order; an obstacle's face only when it carries anchors
+    on_wall: dict[str, list] = {w.name: [] for w in room.walls}
     for r in rows:
         if r.kind == "wall":
             on_wall.setdefault(r.surface, []).append(r)
-    empty = [w.name for w in room.walls if w.name not in on_wall]
+    empty = [name for name, wall_rows in on_wall.items() if not wall_rows]
     tol = next((r.tolerance for r in rows if r.tolerance is not None), None)
     conventions = (
         "<ul><li>Walls are drawn as seen from inside the room; <b>along</b> is measured "
@@ -330,12 +333,12 @@ def render(room: Room, rows: list[Mount], frames: dict[str, VerticalFrame], *, t
     for name, wall_rows in on_wall.items():
         f = frames[name]
         sub = (
-            f"{len(wall_rows)} anchor(s); {f.length:.3f} m long, measured from the "
+            f"{f'{len(wall_rows)} anchor(s)' if wall_rows else 'no anchors'}; "
+            f"{f.length:.3f} m long, measured from the "
             f"{f.reference} at ({f.start[0]:.3f}, {f.start[1]:.3f})"
         )
-        pages.append(
-            _page(f"Wall: {name}", sub, elevation_svg(room, f, wall_rows) + _table(wall_rows))
-        )
+        table = _table(wall_rows) if wall_rows else '<p class="sub">Nothing to mount here.</p>'
+        pages.append(_page(f"Wall: {name}", sub, elevation_svg(room, f, wall_rows) + table))
     return (
         "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
         f"<title>{_e(title)}</title><style>{_CSS}</style></head><body>"

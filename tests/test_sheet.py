@@ -81,12 +81,14 @@ def test_the_sheet_has_a_page_per_wall_with_anchors_and_valid_drawings(tmp_path)
     a = np.array([[2.0, 5.97, 2.2], [7.0, 5.97, 2.2], [3.0, 0.03, 2.5], [5.0, 3.0, 2.97]])
     html = write_sheet(tmp_path, room, a, tolerance=0.01)["html"].read_text()
     pages = html.count('<section class="page">')
-    assert pages == 1 + 1 + 2  # the ceiling plan, the table, the north and south walls
-    assert "Wall: north" in html and "Wall: south" in html and "Wall: east" not in html
+    assert pages == 1 + 1 + 4  # the ceiling plan, the table, the four walls
+    for wall in ("south", "east", "north", "west"):
+        assert f"Wall: {wall}" in html
+    assert html.count("Nothing to mount here.") == 2  # east and west carry no anchor
     for k in range(1, 5):
         assert f"A{k}" in html
     svgs = html.split("<svg")[1:]
-    assert len(svgs) == 3
+    assert len(svgs) == 1 + 4
     for s in svgs:  # each drawing parses as XML
         ET.fromstring("<svg" + s.split("</svg>")[0] + "</svg>")
     assert "windows" in html and "door" in html  # the keep-outs against the walls
