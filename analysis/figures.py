@@ -403,33 +403,9 @@ def peb_map(
         figsize = (5.2 * ncols + 1.2, 3.0 * nrows + 0.8) if n > 1 else (7.0, 4.2)
     fig = new_figure(figsize, dpi)
     axs = fig.subplots(nrows, ncols, squeeze=False).ravel()
-    cmap = _cmap()
     im = None
     for ax, (k, c), (_, _, vals) in zip(axs, planes, maps, strict=False):
-        iu, iv = (i for i in range(3) if i != k)
-        extent = (0.0, room.size[iu], 0.0, room.size[iv])
-        im = ax.imshow(
-            np.ma.masked_invalid(vals.T),
-            origin="lower",
-            extent=extent,
-            cmap=cmap,
-            norm=norm,
-            interpolation="nearest",
-            aspect="equal",
-        )
-        if np.isnan(vals).any():  # outside the room: white, not the singular grey
-            rgba = np.zeros((*vals.T.shape, 4))
-            rgba[np.isnan(vals.T)] = (1.0, 1.0, 1.0, 1.0)
-            ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest",
-                      aspect="equal", zorder=1.5)  # fmt: skip
-        _draw_regions2d(ax, room, iu, iv)
-        # white edges: visible on the dark and the bright end of viridis
-        _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
-        ax.set_xlim(extent[0], extent[1])
-        ax.set_ylim(extent[2], extent[3])
-        ax.set_xlabel(f"{_AXES[iu]} (m)")
-        ax.set_ylabel(f"{_AXES[iv]} (m)")
-        ax.set_title(f"{_AXES[k]} = {c:.2f} m", fontsize=10, pad=14)
+        im = _peb_panel(ax, room, anchors, k, c, vals, norm, anchor_color)
     for ax in axs[n:]:
         ax.set_visible(False)
     _colorbar(fig, im, list(axs[:n]), "PEB (m)", extend, shrink=0.9)
@@ -443,6 +419,29 @@ def peb_map(
             title += "   (grey: singular, PEB = ∞)"
     fig.suptitle(title, fontsize=11)
     return fig
+
+
+def _peb_panel(ax, room: Room, anchors, k: int, c: float, vals, norm, anchor_color: str):
+    """One panel of :func:`peb_map`: the PEB ``vals`` on the plane where axis ``k`` = ``c``,
+    the room's regions and the numbered anchors; the image (for the colour bar)."""
+    iu, iv = (i for i in range(3) if i != k)
+    extent = (0.0, room.size[iu], 0.0, room.size[iv])
+    im = ax.imshow(np.ma.masked_invalid(vals.T), origin="lower", extent=extent, cmap=_cmap(),
+                   norm=norm, interpolation="nearest", aspect="equal")  # fmt: skip
+    if np.isnan(vals).any():  # outside the room: white, not the singular grey
+        rgba = np.zeros((*vals.T.shape, 4))
+        rgba[np.isnan(vals.T)] = (1.0, 1.0, 1.0, 1.0)
+        ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest",
+                  aspect="equal", zorder=1.5)  # fmt: skip
+    _draw_regions2d(ax, room, iu, iv)
+    # white edges: visible on the dark and the bright end of viridis
+    _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel(f"{_AXES[iu]} (m)")
+    ax.set_ylabel(f"{_AXES[iv]} (m)")
+    ax.set_title(f"{_AXES[k]} = {c:.2f} m", fontsize=10, pad=14)
+    return im
 
 
 def coverage_map(

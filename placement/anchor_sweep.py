@@ -165,7 +165,6 @@ def sweep(
     """
     from placement.initial import build_table
     from placement.plan import Planner
-    from placement.simselect import SearchOptions
     from placement.surfaces import candidate_grid
 
     room = room_or_default(room)
@@ -186,7 +185,7 @@ def sweep(
     t0 = time.perf_counter()
     table = None
     if first.simulated and isinstance(first.initial, str):
-        opt = first.search if search is not None else SearchOptions()
+        opt = first.search
         n = len(candidate_grid(room, opt.spacing_for(room)))
         if n < max(counts):
             raise ValueError(

@@ -173,8 +173,9 @@ class Planner:
         self.finalists = _options("finalists", finalists, FinalistOptions)
         self.validation = _options("validation", validation, ValidationOptions)
         self.initial = _check_initial(initial)
-        self.swarm = _options("swarm", swarm, PSOOptions) if swarm is not None else None
-        self.swarm = self.swarm or default_swarm(cost, self.initial)
+        if swarm is None:
+            swarm = default_swarm(cost, self.initial)
+        self.swarm = _options("swarm", swarm, PSOOptions)
         if self.finalists.count > self.swarm.particles:
             raise ValueError(f"finalists.count: must be an integer in [1, {self.swarm.particles}] "
                              f"(the swarm's particles), got {self.finalists.count}")  # fmt: skip
@@ -336,13 +337,13 @@ class Planner:
 
     def result(self) -> PlacementResult:
         """The run's :class:`PlacementResult`."""
-        res = self.swarm_result
+        res, phases = self.swarm_result, self.phases()
         success = res.success and not _degenerate(self.anchors)
         return PlacementResult(
             room=self.room, anchors=self.anchors, cost=self.chosen_cost, cost_name=self.label,
             cost_unit=cost_unit(self.label), history=res.history,
             best_anchors_history=res.best_anchors_history, nit=res.nit,
-            nfev=sum(p["nfev"] for p in self.phases().values()), phases=self.phases(),
+            nfev=sum(p["nfev"] for p in phases.values()), phases=phases,
             success=success, status=0 if success else 1,
             message=res.message if success else "no usable layout: " + res.message,
             initial=self.initial_layouts, validation=self.validation_result,

@@ -248,76 +248,89 @@ def evaluate_swarm(
     ``counts`` (optional) receives the numbers of "lost" and "timeouts" evaluations.
     """
     K = len(layouts)
-    ids = np.arange(K)
     if executor is None:
-        results = _evaluate_chunk(cost, layouts, seed, iteration, ids, eval_timeout)
+        results = _evaluate_chunk(cost, layouts, seed, iteration, np.arange(K), eval_timeout)
     else:
-        size = chunksize or max(1, math.ceil(K / executor_workers(executor)))
-        starts = {}
-        try:
-            for i in range(0, K, size):
-                fut = executor.submit(
-                    _evaluate_chunk,
-                    cost,
-                    layouts[i : i + size],
-                    seed,
-                    iteration,
-                    ids[i : i + size],
-                    eval_timeout,
-                )
-                starts[fut] = i
-        except BrokenProcessPool as exc:
-            raise _broken(iteration, exc) from None
-        deadline = None
-        if eval_timeout is not None:
-            rounds = math.ceil(len(starts) / executor_workers(executor))
-            deadline = time.monotonic() + rounds * size * eval_timeout + _DEADLINE_GRACE
-        results = [None] * K
-        pending = set(starts)
-        killed = False
-        while pending:
-            left = None if deadline is None else max(0.0, deadline - time.monotonic())
-            done, pending = wait(pending, timeout=left)
-            for fut in done:
-                start = starts[fut]
-                n = min(size, K - start)
-                try:
-                    chunk = fut.result()
-                except BrokenProcessPool as exc:
-                    raise _broken(iteration, exc) from None
-                except Exception as exc:  # noqa: BLE001 - a lost worker costs its particles only
-                    chunk = [(math.inf, f"{type(exc).__name__}: {exc}")] * n
-                results[start : start + n] = chunk
-            if pending and deadline is not None and time.monotonic() >= deadline:
-                reason = f"no result within the eval_timeout of {eval_timeout:g} s per evaluation"
-                kill = getattr(executor, "kill", None)
-                for fut in list(pending):
-                    if not killed and kill is not None and kill(fut, reason):
-                        continue  # resolves shortly as WorkerLost
-                    fut.cancel()
-                    start = starts[fut]
-                    n = min(size, K - start)
-                    results[start : start + n] = [(math.inf, f"EvaluationTimeout: {reason}")] * n
-                    pending.discard(fut)
-                killed = True
-                deadline = time.monotonic() + _DEADLINE_GRACE
+        results = _evaluate_pooled(cost, layouts, seed, iteration, executor, chunksize,
+                                   eval_timeout)  # fmt: skip
     costs = np.array([c for c, _ in results], dtype=float)
     failures = 0
     for i, (_, err) in enumerate(results):
-        if err is not None:
-            failures += 1
-            if counts is not None:
-                key = None
-                if err.startswith("EvaluationTimeout") or "eval_timeout" in err:
-                    key = "timeouts"
-                elif err.startswith("WorkerLost"):
-                    key = "lost"
-                if key is not None:
-                    counts[key] = counts.get(key, 0) + 1
-            logger.warning(
-                "iteration %d particle %d: cost failed (%s); cost set to inf", iteration, i, err
-            )
+        if err is None:
+            continue
+        failures += 1
+        if counts is not None:
+            key = None
+            if err.startswith("EvaluationTimeout") or "eval_timeout" in err:
+                key = "timeouts"
+            elif err.startswith("WorkerLost"):
+                key = "lost"
+            if key is not None:
+                counts[key] = counts.get(key, 0) + 1
+        logger.warning(
+            "iteration %d particle %d: cost failed (%s); cost set to inf", iteration, i, err
+        )
     return costs, failures
+
+
+def _evaluate_pooled(cost, layouts, seed, iteration, executor, chunksize, eval_timeout) -> list:
+    """The (cost, error) of every layout, in chunks on ``executor``; a chunk past the
+    deadline of ``eval_timeout`` has its worker stopped (or is abandoned) and costs inf."""
+    K = len(layouts)
+    ids = np.arange(K)
+    size = chunksize or max(1, math.ceil(K / executor_workers(executor)))
+    starts = {}
+    try:
+        for i in range(0, K, size):
+            fut = executor.submit(_evaluate_chunk, cost, layouts[i : i + size], seed, iteration,
+                                  ids[i : i + size], eval_timeout)  # fmt: skip
+            starts[fut] = i
+    except BrokenProcessPool as exc:
+        raise _broken(iteration, exc) from None
+    deadline = None
+    if eval_timeout is not None:
+        rounds = math.ceil(len(starts) / executor_workers(executor))
+        deadline = time.monotonic() + rounds * size * eval_timeout + _DEADLINE_GRACE
+    results = [None] * K
+    pending = set(starts)
+    killed = False
+    while pending:
+        left = None if deadline is None else max(0.0, deadline - time.monotonic())
+        done, pending = wait(pending, timeout=left)
+        for fut in done:
+            results[starts[fut] : starts[fut] + size] = _chunk_result(fut, size, K - starts[fut],
+                                                                      iteration)  # fmt: skip
+        if pending and deadline is not None and time.monotonic() >= deadline:
+            _stop_late(executor, pending, starts, results, size, K, eval_timeout, killed)
+            killed = True
+            deadline = time.monotonic() + _DEADLINE_GRACE
+    return results
+
+
+def _chunk_result(fut, size: int, left: int, iteration: int) -> list:
+    """The results of a finished chunk of ``min(size, left)`` layouts: inf for each when its
+    worker was lost; a broken executor raises :class:`ExecutorBroken`."""
+    try:
+        return fut.result()
+    except BrokenProcessPool as exc:
+        raise _broken(iteration, exc) from None
+    except Exception as exc:  # noqa: BLE001 - a lost worker costs its particles only
+        return [(math.inf, f"{type(exc).__name__}: {exc}")] * min(size, left)
+
+
+def _stop_late(executor, pending, starts, results, size, K, eval_timeout, killed) -> None:
+    """Past the deadline: stop the worker of each late chunk (first time, when the executor
+    can), which then resolves as WorkerLost; abandon the others at inf (removed from
+    ``pending``)."""
+    reason = f"no result within the eval_timeout of {eval_timeout:g} s per evaluation"
+    kill = getattr(executor, "kill", None)
+    for fut in list(pending):
+        if not killed and kill is not None and kill(fut, reason):
+            continue  # resolves shortly as WorkerLost
+        fut.cancel()
+        n = min(size, K - starts[fut])
+        results[starts[fut] : starts[fut] + n] = [(math.inf, f"EvaluationTimeout: {reason}")] * n
+        pending.discard(fut)
 
 
 def load_checkpoint(path: str | os.PathLike) -> dict | None:

@@ -416,6 +416,22 @@ def _certify(G, wv, lam, M, criterion, inp, cost_m2, obj, solver_status, details
     return 1, "inaccurate", lower, gap, relaxed
 
 
+def _check_settings(inp, samples, starts, solver_opts) -> tuple[int, int]:
+    """The rounding's ``samples`` and ``starts``, checked with the candidates' count and
+    the Clarabel settings ``solver_opts``."""
+    if len(inp.candidates) > MAX_CANDIDATES:
+        raise ValueError(
+            f"candidates: {len(inp.candidates)} points, more than the {MAX_CANDIDATES} the "
+            "relaxation handles; use a larger spacing"
+        )
+    samples = checks.count("samples", samples, low=1, high=100_000)
+    starts = checks.count("starts", starts, low=1, high=10_000)
+    if solver_opts is not None:
+        checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
+        checks.known_keys("solver_opts", solver_opts, _solver_keys())
+    return samples, starts
+
+
 def relax_select(
     room: Room,
     M: int,
@@ -452,16 +468,7 @@ def relax_select(
     """
     t_start = time.perf_counter()
     inp = design_inputs(room, M, candidates, criterion, sigma, nodes, spacing)
-    if len(inp.candidates) > MAX_CANDIDATES:
-        raise ValueError(
-            f"candidates: {len(inp.candidates)} points, more than the {MAX_CANDIDATES} the "
-            "relaxation handles; use a larger spacing"
-        )
-    samples = checks.count("samples", samples, low=1, high=100_000)
-    starts = checks.count("starts", starts, low=1, high=10_000)
-    if solver_opts is not None:
-        checks.mapping("solver_opts", solver_opts, "a dict of Clarabel settings or None")
-        checks.known_keys("solver_opts", solver_opts, _solver_keys())
+    samples, starts = _check_settings(inp, samples, starts, solver_opts)
     rng = streams.rng("rng", rng)
     G = inp.table()
     N, M = G.shape[1], inp.M

@@ -25,7 +25,6 @@ printable sheet (:mod:`placement.sheet_html`) draws the same numbers.
 from __future__ import annotations
 
 import csv
-import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +35,7 @@ from placement.sheet_html import render
 from placement.surfaces import mounting_surfaces, surface_index
 from simulation import checks
 from simulation.directivity import aim_vectors
+from simulation.mounting import face_obstacles
 from simulation.room import Room, as_room
 
 #: the CSV's columns, in order
@@ -133,11 +133,11 @@ def vertical_frames(room: Room) -> dict[str, VerticalFrame]:
             wall.name, f"{corners[(i + 1) % len(corners)]} corner", tuple(wall.end),
             tuple(-d), tuple(wall.normal[:2]), wall.length, 0.0, wall.height,
         )  # fmt: skip
-    obstacles = {ob.name or f"obstacle-{k}": ob for k, ob in enumerate(room.obstacles)}
+    faces = face_obstacles(room)
     for s in mounting_surfaces(room):
-        if ":" not in s.name or abs(s.normal[2]) > 0.5:
+        if s.name not in faces or abs(s.normal[2]) > 0.5:
             continue
-        ob = obstacles[s.name.rsplit(":", 1)[0]]
+        ob = faces[s.name]
         n = np.asarray(s.normal[:2])
         right = np.array([-n[1], n[0]])
         axis = int(np.argmax(np.abs(n)))
@@ -154,10 +154,8 @@ def vertical_frames(room: Room) -> dict[str, VerticalFrame]:
 
 def _plane_reference(room: Room, surface: str) -> tuple[str, tuple[float, float]]:
     """The reference corner (name, (x, y)) of a horizontal surface."""
-    if ":" in surface:
-        ob = {o.name or f"obstacle-{k}": o for k, o in enumerate(room.obstacles)}[
-            surface.rsplit(":", 1)[0]
-        ]
+    ob = face_obstacles(room).get(surface)
+    if ob is not None:  # an obstacle's top
         return f"{surface} corner", (float(ob.lo[0]), float(ob.lo[1]))
     c = room.floor_corners[0]
     return f"{corner_names(room)[0]} corner", (float(c[0]), float(c[1]))
@@ -250,8 +248,3 @@ def write_sheet(out_dir, room: Room, anchors, *, tolerance: float | None = None,
     (out / "sheet.html").write_text(html)
     paths["html"] = out / "sheet.html"
     return paths
-
-
-def as_dicts(rows: list[Mount]) -> list[dict]:
-    """The mounts as JSON-ready dicts."""
-    return [dataclasses.asdict(r) for r in rows]

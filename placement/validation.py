@@ -163,78 +163,91 @@ def validate_layout(
     executor: Executor | None = None,
     progress=None,
 ) -> dict[str, Any]:
-    """The three checks of the module docstring for anchors (M, 3), as a plain dict.
+    """The four checks of the module docstring for anchors (M, 3), as a plain dict.
 
     Keys: ``realizations``, ``seed``, ``std``, ``mean``, ``p95``, ``rms`` (m, the grid
     check over the fixes among all R · P errors), ``availability`` (the share of the R · P
     with a fix; every summary has one), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
     ``per_node`` (availability, RMSE, σ, the paper's DOP and the RMS-based DOP per node),
-    ``errors`` (R, P; NaN: no fix); ``held_out``
-    with ``grid`` and ``random`` summaries; ``mounting`` with its summary. Each check
-    draws its noise from its own stream of ``rng`` (an int seed, a numpy Generator drawn
-    once, or None). Checks run on ``executor`` when
-    given; the result does not depend on it. ``progress(done, total)`` is called as the
-    checks' parts finish.
+    ``errors`` (R, P; NaN: no fix); ``held_out`` with ``grid`` and ``random`` summaries;
+    ``mounting`` and ``field`` with their summaries. Each check draws its noise from its
+    own stream of ``rng`` (an int seed, a numpy Generator drawn once, or None). Checks run
+    on ``executor`` when given; the result does not depend on it. ``progress(done,
+    total)`` is called as the checks' parts finish.
     """
     opt = options or ValidationOptions()
     seed = streams.entropy("rng", rng)
     mount_tolerance = check_mount_tolerance(mount_tolerance)
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
-    out: dict[str, Any] = {}
     if opt.realizations == 0:
-        return out
+        return {}
+    calls = _calls(room, a, nodes, opt, mount_tolerance, seed)
+    flat = [c for group in calls.values() for c in group]
+    results = iter(run_calls(executor, flat, progress=progress))
+    jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
+    out = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
+    out.update(_other_blocks(jobs, opt, mount_tolerance))
+    if out["availability"] < 1:
+        out["message"] = (
+            f"{100 * (1 - out['availability']):.2f} % of the node realizations have no fix "
+            "(fewer than 4 anchors heard); the statistics are over the fixes"
+        )
+    elif not math.isfinite(out["std"]):
+        out["message"] = "some position errors are not finite"
+    return out
+
+
+def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) -> dict:
+    """The validation's work by check, as (function, args) calls, each on its own stream of
+    ``seed``."""
     child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(5)]
     # the grid check in two halves, each with its own stream, to keep two workers busy
     halves = [opt.realizations - opt.realizations // 2, opt.realizations // 2]
     halves_seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
+    P = opt.precision
     calls: dict[str, list] = {
-        "grid": [
-            (_evaluate, (room, a, nodes, R, s, opt.precision))
-            for R, s in zip(halves, halves_seeds, strict=True)
-            if R > 0
-        ]
-    }
+        "grid": [(_evaluate, (room, a, nodes, R, s, P))
+                 for R, s in zip(halves, halves_seeds, strict=True) if R > 0]
+    }  # fmt: skip
     if opt.held_out_realizations:
         R = opt.held_out_realizations
         rnd = random_nodes(room, opt.random_nodes, np.random.default_rng(child[1]))
-        calls["held_grid"] = [
-            (_evaluate, (room, a, held_out_grid(room), R, child[2], opt.precision))
-        ]
-        calls["held_random"] = [(_evaluate, (room, a, rnd, R, child[3], opt.precision))]
-    if opt.mount_draws and mount_tolerance > 0:
-        calls["mounting"] = [
-            (mounted_errors, (room, a, nodes, mount_tolerance, d, child[0], opt.precision))
-            for d in range(opt.mount_draws)
-        ]
+        calls["held_grid"] = [(_evaluate, (room, a, held_out_grid(room), R, child[2], P))]
+        calls["held_random"] = [(_evaluate, (room, a, rnd, R, child[3], P))]
+    if opt.mount_draws and tolerance > 0:
+        calls["mounting"] = [(mounted_errors, (room, a, nodes, tolerance, d, child[0], P))
+                             for d in range(opt.mount_draws)]  # fmt: skip
     if opt.field_draws:
-        calls["field"] = [
-            (field_errors, (room, a, opt.random_nodes, mount_tolerance, d, child[4], opt.precision))
-            for d in range(opt.field_draws)
-        ]
-    flat = [c for group in calls.values() for c in group]
-    results = iter(run_calls(executor, flat, progress=progress))
-    jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
-    parts = jobs["grid"]
+        calls["field"] = [(field_errors, (room, a, opt.random_nodes, tolerance, d, child[4], P))
+                          for d in range(opt.field_draws)]  # fmt: skip
+    return calls
+
+
+def _grid_block(parts, a, nodes, opt: ValidationOptions, seed: int, sigma) -> dict[str, Any]:
+    """The grid check's keys from its evaluations ``parts``."""
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
-    out.update(
-        {
-            "realizations": int(opt.realizations),
-            "seed": int(seed),
-            **{k: v for k, v in summary(e).items() if k != "n"},
-            "mean_peb": float(np.mean(peb(a, nodes, sigma))),
-            "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
-            "per_node": {
-                "availability": np.mean(np.isfinite(e), axis=0).tolist(),
-                "rmse": node_rmse(e).tolist(),
-                "std": node_std(e).tolist(),
-                "dop": dop(e, range_errors).tolist(),
-                "dop_rms": dop_rms(e, range_errors).tolist(),
-            },
-            "errors": np.round(e, 6).tolist(),
-        }
-    )
+    return {
+        "realizations": int(opt.realizations),
+        "seed": int(seed),
+        **{k: v for k, v in summary(e).items() if k != "n"},
+        "mean_peb": float(np.mean(peb(a, nodes, sigma))),
+        "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
+        "per_node": {
+            "availability": np.mean(np.isfinite(e), axis=0).tolist(),
+            "rmse": node_rmse(e).tolist(),
+            "std": node_std(e).tolist(),
+            "dop": dop(e, range_errors).tolist(),
+            "dop_rms": dop_rms(e, range_errors).tolist(),
+        },
+        "errors": np.round(e, 6).tolist(),
+    }
+
+
+def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[str, Any]:
+    """The ``held_out``, ``mounting`` and ``field`` keys of the checks that ran."""
+    out: dict[str, Any] = {}
     if "held_grid" in jobs:
         (g,), (r,) = jobs["held_grid"], jobs["held_random"]
         out["held_out"] = {
@@ -243,26 +256,12 @@ def validate_layout(
             "random": {**summary(r.errors), "nodes": int(len(r.nodes))},
         }
     if "mounting" in jobs:
-        errs = np.concatenate(jobs["mounting"])
-        out["mounting"] = {
-            "tolerance_m": float(mount_tolerance),
-            "draws": int(opt.mount_draws),
-            **summary(errs),
-        }
+        out["mounting"] = {"tolerance_m": float(tolerance), "draws": int(opt.mount_draws),
+                           **summary(np.concatenate(jobs["mounting"]))}  # fmt: skip
     if "field" in jobs:
-        out["field"] = {
-            "draws": int(opt.field_draws),
-            "tags_per_draw": int(opt.random_nodes),
-            "tolerance_m": float(mount_tolerance),
-            **summary(np.concatenate(jobs["field"])),
-        }
-    if out["availability"] < 1:
-        out["message"] = (
-            f"{100 * (1 - out['availability']):.2f} % of the node realizations have no fix "
-            "(fewer than 4 anchors heard); the statistics are over the fixes"
-        )
-    elif not math.isfinite(out["std"]):
-        out["message"] = "some position errors are not finite"
+        out["field"] = {"draws": int(opt.field_draws), "tags_per_draw": int(opt.random_nodes),
+                        "tolerance_m": float(tolerance),
+                        **summary(np.concatenate(jobs["field"]))}  # fmt: skip
     return out
 
 

@@ -87,8 +87,8 @@ class WorkerPool(Executor):
     max_workers : processes (default: the available cores). mp_context : a
     ``multiprocessing`` context (default: the platform's).
 
-    Attributes ``lost`` (tasks lost to dead or stopped workers) and ``restarts`` (workers
-    replaced) count what happened.
+    ``lost`` counts the tasks lost to dead or stopped workers, ``restarts`` the workers
+    replaced (pebble replaces each of those).
     """
 
     def __init__(self, max_workers: int | None = None, *, mp_context=None):
@@ -108,7 +108,6 @@ class WorkerPool(Executor):
         self._reasons: dict[Future, str] = {}  # why the parent stopped a task's worker
         self._shutdown = False
         self.lost = 0
-        self.restarts = 0
 
     def submit(self, fn, /, *args, **kwargs) -> Future:
         """Schedule ``fn(*args, **kwargs)`` on a worker (``concurrent.futures.Executor``);
@@ -132,7 +131,6 @@ class WorkerPool(Executor):
             if isinstance(exc, ProcessExpired):
                 with self._lock:
                     self.lost += 1
-                    self.restarts += 1  # pebble starts a new worker in its place
                 outer.set_exception(_lost(exc, reason))
             elif exc is not None:
                 outer.set_exception(exc)
@@ -141,6 +139,11 @@ class WorkerPool(Executor):
 
         inner.add_done_callback(done)
         return outer
+
+    @property
+    def restarts(self) -> int:
+        """Workers replaced: pebble starts a new one for each lost."""
+        return self.lost
 
     def kill(self, future: Future, reason: str = "killed by the parent") -> bool:
         """Stop the worker process running the task of ``future``; the future then raises

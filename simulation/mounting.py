@@ -179,6 +179,15 @@ def _obstacle_surfaces(room) -> list[tuple[MountingSurface, int]]:
     return out
 
 
+def face_obstacles(room) -> dict:
+    """{surface name: the obstacle it is a face of} for the faces of the room's mountable
+    obstacles among :func:`mounting_surfaces`."""
+    from simulation.room import as_room
+
+    room = as_room(room)
+    return {s.name: room.obstacles[k] for s, k in _obstacle_surfaces(room)}
+
+
 def mounting_surfaces(room) -> tuple[MountingSurface, ...]:
     """The room's mounting surfaces: ``room.mounting`` in its order, then the faces of its
     mountable obstacles (module docstring)."""

@@ -185,34 +185,16 @@ def locate(
     svd = _centred_svd(layouts)
     heard = ~np.isnan(R)
     partial = ~np.all(heard, axis=1)
-    if np.any(partial):
-        lo, hi = _heard_bounds(layouts, owner, heard, partial, lo, hi, region)
-    x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
-    if np.any(partial) and x0 is None:
-        _masked_starts(layouts, _c(owner, np.int64), _c(R), _c(lo), _c(hi), _c(partial), x)
-    if bounded:
-        x = np.clip(x, lo, hi)
+    x, lo, hi = _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded)
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
         layouts, owner, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
     )
-    rank = np.atleast_1d(degeneracy.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
-    # collinear: rotation about the anchor line leaves the ranges unchanged
-    status[(rank < 2)[owner]] = -1
-    if np.any(partial):
-        lost = partial.copy()
-        lost[partial] = ~_fixable(layouts, owner[partial], heard[partial])
-        status[lost] = -2
-        x[lost] = np.nan
-        cost[lost] = np.nan
+    _mark_undetermined(layouts, owner, svd, heard, partial, x, cost, status)
     converged = status > 0
     if not np.all(converged):
-        logger.debug(
-            "locate: %d of %d nodes not converged (max_iter=%d)",
-            int(np.sum(~converged)),
-            len(R),
-            max_iter,
-        )
+        n = int(np.sum(~converged))
+        logger.debug("locate: %d of %d nodes not converged (max_iter=%d)", n, len(R), max_iter)
     out = x.reshape(*lead, 3)
     if not full_output:
         return out
@@ -224,6 +206,35 @@ def locate(
         cost=cost.reshape(lead),
         start=start.reshape(*lead, 3),
     )
+
+
+def _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded):
+    """(starts (N, 3), lo, hi): the start of every node (module docstring), its search box
+    narrowed to the anchors it heard when some are missing, clipped to it when ``bounded``."""
+    partial = ~np.all(heard, axis=1)
+    if np.any(partial):
+        lo, hi = _heard_bounds(layouts, owner, heard, partial, lo, hi, region)
+    x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
+    if np.any(partial) and x0 is None:
+        _masked_starts(layouts, _c(owner, np.int64), _c(R), _c(lo), _c(hi), _c(partial), x)
+    if bounded:
+        x = np.clip(x, lo, hi)
+    return x, lo, hi
+
+
+def _mark_undetermined(layouts, owner, svd, heard, partial, x, cost, status) -> None:
+    """In place: status −1 for every node of a collinear layout (rotation about the anchor
+    line leaves the ranges unchanged); status −2 and NaN for a node whose heard anchors
+    cannot fix it."""
+    M = layouts.shape[-2]
+    rank = np.atleast_1d(degeneracy.rank_of_spread(svd[1] / 2, M))  # svd of 2 (a − ā)
+    status[(rank < 2)[owner]] = -1
+    if np.any(partial):
+        lost = partial.copy()
+        lost[partial] = ~_fixable(layouts, owner[partial], heard[partial])
+        status[lost] = -2
+        x[lost] = np.nan
+        cost[lost] = np.nan
 
 
 def _check_input(anchors, ranges, max_iter, tols, flags) -> tuple[np.ndarray, np.ndarray, int]:

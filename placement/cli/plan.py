@@ -149,9 +149,9 @@ FLAGS = {
 def _as_flag(kind: str, exc: ValueError) -> ValueError:
     """The library's error about an option's field, naming the flag that sets it."""
     text = str(exc)
-    name = text.split(":")[0].removeprefix(f"{kind}.").removeprefix("finalists.")
+    name, _, rest = text.partition(":")
     flag = FLAGS[kind].get(name)
-    return ValueError(f"{flag}{text[len(text.split(':')[0]) :]}" if flag else text)
+    return ValueError(f"{flag}:{rest}" if flag else text)
 
 
 def plan_options(args) -> dict:
