@@ -72,7 +72,9 @@ def _fresh_moments(room, anchors, seed, draws):
 def validation_figures(room, anchors, seed) -> dict:
     """σ and P95 at the 270 nodes, held-out and mounting-error σ of a layout validated as
     ``seed_then_pso(..., rng=seed)`` validates its answer."""
-    v = validate_layout(room, anchors, rng=phase_seed(seed, "validation"), mount_tolerance=0.03)
+    v = validate_layout(
+        room, anchors, rng=phase_seed(seed, "validation"), mount_tolerance=0.03
+    ).to_dict()
     return {
         "std": v["std"],
         "p95": v["p95"],

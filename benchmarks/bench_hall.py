@@ -53,7 +53,7 @@ def main() -> None:
         with ProcessPoolExecutor(args.workers) as ex:
             res = seed_then_pso(room, args.anchors, rng=args.seed, executor=ex, progress=False)
         seconds = time.perf_counter() - t0
-        v = res.validation
+        v = res.validation.to_dict()
         emit(
             "hall",
             design=name,
@@ -68,7 +68,7 @@ def main() -> None:
             held_out_random=summary(v["held_out"]["random"]),
             mounting=summary(v["mounting"]),
             covered_share=analysis.covered_share(room, res.anchors, room.grid()),
-            reach_exceeded=res.settings["reach"]["exceeded"],
+            reach_exceeded=res.settings.reach["exceeded"],
             anchors=res.anchors.tolist(),
         )
 

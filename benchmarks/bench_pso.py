@@ -52,7 +52,7 @@ def _summary(v: dict) -> dict:
 
 def _validation_rng(res) -> int:
     """The validation stream of a run (as seed_then_pso derives it)."""
-    return phase_seed(res.settings["seed"], "validation")
+    return phase_seed(res.settings.seed, "validation")
 
 
 def run(room, M, seed, args, ex, unseeded=False) -> dict:
@@ -71,21 +71,21 @@ def run(room, M, seed, args, ex, unseeded=False) -> dict:
         "nfev": res.nfev,
         "nit": res.nit,
         "history": res.history,
-        "validation": _summary(res.validation),
+        "validation": _summary(res.validation.to_dict()),
         "initial": [s.to_dict() for s in res.initial],
         "finalists": [{k: f[k] for k in ("source", "pso_cost", "cost")} for f in res.finalists],
         "chosen": next(
             (f["source"] for f in res.finalists if np.array_equal(f["anchors"], res.anchors)),
             "swarm",
         ),
-        "search_result": dict(res.settings.get("search_result", {})),
+        "search_result": dict(res.settings.search_result),
         "timings": res.timings,
         "nfev_by_phase": {k: p["nfev"] for k, p in res.phases.items()},
         "seconds": seconds,
     }
     if res.initial:
         best = min(res.initial, key=lambda s: s.cost)
-        v = validate_layout(room, best.anchors, rng=_validation_rng(res), executor=ex)
+        v = validate_layout(room, best.anchors, rng=_validation_rng(res), executor=ex).to_dict()
         out["best_seed"] = {"name": best.name, "anchors": best.anchors.tolist(), **_summary(v)}
     return out
 
@@ -96,7 +96,7 @@ def baseline(room, M, seed, folder: Path, ex) -> dict | None:
         return None
     anchors = np.array(json.loads(path.read_text())["anchors"])
     rng = phase_seed(seed, "validation")
-    v = validate_layout(room, anchors, rng=rng, executor=ex)
+    v = validate_layout(room, anchors, rng=rng, executor=ex).to_dict()
     return {"source": str(path), "anchors": anchors.tolist(), **_summary(v)}
 
 

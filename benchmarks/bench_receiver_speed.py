@@ -83,8 +83,9 @@ def plans(workers: int) -> None:
             )  # as `anchorplan plan`
             seconds[label] = time.perf_counter() - t0
         emit("receiver_plan", design=label, seconds=seconds[label], workers=workers,
-             std=res.validation["std"], mean=res.validation["mean"], p95=res.validation["p95"],
-             ratio=seconds[label] / seconds["1ms-paper"])  # fmt: skip
+             std=res.validation.std, mean=res.validation.mean, p95=res.validation.p95,
+             ratio=seconds[label] / seconds["1ms-paper"],
+             phases={k: round(v["seconds"], 2) for k, v in res.phases.items()})  # fmt: skip
 
 
 def main() -> None:

@@ -84,7 +84,7 @@ def main() -> None:
     with ProcessPoolExecutor(args.workers) as ex:
         for name, a in layouts.items():
             v = validate_layout(room, a, rng=phase_seed(seed, "validation"), mount_tolerance=tol,
-                                executor=ex)  # fmt: skip
+                                executor=ex).to_dict()  # fmt: skip
             errors = np.asarray(v["errors"], dtype=float)
             emit(
                 "rooms",

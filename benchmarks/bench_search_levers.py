@@ -47,7 +47,7 @@ def run(room, M, seed, table, options, ex, workers, cost="variance") -> dict:
     planner = Planner(room, M, rng=seed, cost=cost, search=options, executor=ex,
                       progress=False, table=table)  # fmt: skip
     res = planner.solve()
-    v = res.validation
+    v = res.validation.to_dict()
     return dict(
         M=M,
         seed=seed,

@@ -101,7 +101,7 @@ def _counts(anchors) -> list[int]:
 
 
 def _row(M: int, res, seconds: float) -> SweepRow:
-    v = res.validation or {}
+    v = {} if res.validation is None else res.validation.to_dict()
     held = (v.get("held_out") or {}).get("grid", {})
     mount = v.get("mounting") or {}
     field = v.get("field") or {}

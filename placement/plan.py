@@ -43,14 +43,14 @@ from analysis.fim import DEFAULT_SIGMA, peb
 from placement.costs import DrawsCost, cost_name, is_simulated, make_cost
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
-from placement.plan_result import PlacementResult
+from placement.plan_result import PlacementResult, PlanSettings
 from placement.progress import ProgressBar
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.rangetable import node_draws
 from placement.simselect import SearchOptions
 from placement.streams import phase_seed
 from placement.surfaces import MAX_ANCHORS, project
-from placement.validation import ValidationOptions, validate_layout
+from placement.validation import Validation, ValidationOptions, validate_layout
 from placement.workers import executor_workers
 from simulation import checks, degeneracy, streams
 from simulation.room import Room, room_or_default
@@ -101,7 +101,7 @@ def seed_then_pso(
     nodes : (P, 3) evaluation nodes (None: ``room.grid()``).
     rng : an int seed (default 0: the same result serially, in parallel and resumed from
         a checkpoint), a numpy Generator (drawn once) or None (fresh entropy); the int used
-        is recorded in ``settings["seed"]``. The same rule holds for :func:`placement.sweep`
+        is recorded in ``settings.seed``. The same rule holds for :func:`placement.sweep`
         and :func:`simulation.evaluate_layout`.
     executor : a ``concurrent.futures.Executor`` for the simulations (results do not
         depend on it).
@@ -124,7 +124,7 @@ COUNTS = {
     "pso": "cost evaluations (simulations for a simulated cost)",
     "refinement": "table layouts scored",
     "finalists": "draw simulations",
-    "validation": "noise realizations (grid, held-out grid and points, mounting draws)",
+    "validation": "noise realizations (grid, held-out grid and points, mounting and field draws)",
 }
 
 #: the swarm of ``seed_then_pso`` for a simulated cost: the starting layouts and a particle
@@ -201,7 +201,7 @@ class Planner:
         self.finalist_rows: list[dict[str, Any]] = []
         self.anchors: np.ndarray | None = None
         self.chosen_cost = math.nan
-        self.validation_result: dict[str, Any] = {}
+        self.validation_result: Validation | None = None
         self.seconds: dict[str, float] = {}
         self.nfev: dict[str, int] = {}
         self._t0 = self._last = time.perf_counter()
@@ -332,8 +332,9 @@ class Planner:
             bar.close()
         v = self.validation
         mounting = self.search.mount_tolerance > 0 and v.mount_draws
-        n = v.realizations + 2 * v.held_out_realizations + (v.mount_draws if mounting else 0)
-        self._lap("validation", n if self.validation_result else 0)
+        n = (v.realizations + 2 * v.held_out_realizations + (v.mount_draws if mounting else 0)
+             + v.field_draws)  # fmt: skip
+        self._lap("validation", 0 if self.validation_result is None else n)
 
     def result(self) -> PlacementResult:
         """The run's :class:`PlacementResult`."""
@@ -375,29 +376,18 @@ class Planner:
                          seed=phase_seed(self.seed, key), statistic=self.cost,
                          precision=self.search.precision)  # fmt: skip
 
-    def settings(self) -> dict[str, Any]:
+    def settings(self) -> PlanSettings:
         """Every setting of the run, for ``result.json``."""
         initial = self.initial
-        return {
-            "M": self.M,
-            "cost": self.label,
-            "initial": "auto"
-            if isinstance(initial, str)
-            else ("none" if initial is None else "user"),
-            "seed": self.seed,
-            "search": dataclasses.asdict(self.search),
-            "search_lattices": {
-                "spacing": self.search.spacing_for(self.room),
-                "fine_spacings": list(self.search.fine_spacings_for(self.room)),
-            },
-            "search_result": self.search_summary,
-            "swarm": dataclasses.asdict(self.swarm),
-            "mount_tolerance": self.search.mount_tolerance,
-            "finalists": dataclasses.asdict(self.finalists),
-            "validation": dataclasses.asdict(self.validation),
-            "sigma": self.sigma,
-            "reach": self.reach,
-        }
+        return PlanSettings(
+            M=self.M, cost=self.label,
+            initial="auto" if isinstance(initial, str) else ("none" if initial is None else "user"),
+            seed=self.seed, search=self.search,
+            search_lattices={"spacing": self.search.spacing_for(self.room),
+                             "fine_spacings": list(self.search.fine_spacings_for(self.room))},
+            search_result=self.search_summary, swarm=self.swarm, finalists=self.finalists,
+            validation=self.validation, sigma=self.sigma, reach=self.reach,
+        )  # fmt: skip
 
     def phases(self) -> dict[str, dict[str, Any]]:
         """Per phase run: its seconds, its evaluations and what they count."""

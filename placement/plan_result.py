@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -9,10 +10,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from placement.finalists import FinalistOptions
 from placement.initial import InitialLayout
-from placement.pso import PSOResult
+from placement.pso import PSOOptions, PSOResult
 from placement.result import LayoutResult
 from placement.serialization import to_jsonable
+from placement.simselect import SearchOptions
+from placement.validation import Validation, ValidationOptions
 from simulation.room import Room
 from simulation.statistics import cost_unit
 
@@ -21,6 +25,62 @@ PLACEMENT_STATUS = {
     0: "a layout was planned",
     1: "no usable layout: every candidate failed or is degenerate",
 }
+
+
+@dataclass(frozen=True)
+class PlanSettings:
+    """Every setting of a plan (the ``settings`` of ``result.json``).
+
+    M the anchors; cost the cost's name; initial "auto", "none" or "user" (the starting
+    layouts); seed the run's int entropy (:mod:`placement.streams`); search, swarm,
+    finalists and validation the options objects used; search_lattices the candidate
+    grid's ``spacing`` and the refinement's ``fine_spacings`` (m) in this room;
+    search_result the search's summary (empty without a search); sigma the range σ (m) of
+    the reported PEB; reach :func:`placement.plan.reach_check`'s figures.
+    """
+
+    M: int
+    cost: str
+    initial: str
+    seed: int
+    search: SearchOptions
+    search_lattices: dict[str, Any]
+    search_result: dict[str, Any]
+    swarm: PSOOptions
+    finalists: FinalistOptions
+    validation: ValidationOptions
+    sigma: float
+    reach: dict[str, Any]
+
+    @property
+    def mount_tolerance(self) -> float:
+        """The mounting tolerance (m) of the search's moved draws and of the validation."""
+        return self.search.mount_tolerance
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plain-JSON form (the options as dicts; ``mount_tolerance`` repeated at the
+        top level for readers of the file)."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        for key in ("search", "swarm", "finalists", "validation"):
+            out[key] = dataclasses.asdict(out[key])
+        order = [*list(out)[:8], "mount_tolerance", *list(out)[8:]]
+        out["mount_tolerance"] = self.mount_tolerance
+        return {k: out[k] for k in order}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PlanSettings:
+        """Read back :meth:`to_dict` (options keys this version does not know are left out)."""
+        options = {"search": SearchOptions, "swarm": PSOOptions, "finalists": FinalistOptions,
+                   "validation": ValidationOptions}  # fmt: skip
+        kw = {f.name: d.get(f.name) for f in dataclasses.fields(cls)}
+        for key, kind in options.items():
+            known = {f.name for f in dataclasses.fields(kind)}
+            kw[key] = kind(**{k: v for k, v in (d.get(key) or {}).items() if k in known})
+        kw["search_result"] = d.get("search_result") or {}
+        kw["search_lattices"] = d.get("search_lattices") or {}
+        kw["reach"] = d.get("reach") or {}
+        kw["sigma"] = float(d["sigma"]) if d.get("sigma") is not None else math.nan
+        return cls(**kw)
 
 
 @dataclass(frozen=True)
@@ -33,13 +93,15 @@ class PlacementResult(LayoutResult):
     fresh draws (``source``, ``anchors``, swarm cost ``pso_cost``, fresh-draw cost
     ``cost``; the chosen one has the lowest); initial the swarm's starting layouts with
     their costs;
-    validation the checks of :func:`placement.validation.validate_layout`; timings the
+    validation the checks of :func:`placement.validation.validate_layout` (a
+    :class:`placement.validation.Validation`, None when it did not run); timings the
     seconds of every phase and ``total``; phases per phase its ``seconds``, its
     evaluations ``nfev`` and what it counts (``counts``: table layouts scored, swarm
     simulations, draw simulations, validation realizations); nfev their sum; nit the
-    swarm's iterations; settings every setting of the run. ``to_dict()`` is the
-    ``result.json`` format and
-    :meth:`from_dict` reads it back.
+    swarm's iterations; settings every setting of the run (:class:`PlanSettings`).
+    ``to_dict()`` is the
+    ``result.json`` format, :meth:`from_dict` reads it back and :meth:`read` reads a
+    result folder.
     """
 
     FUN: ClassVar[str] = "cost"
@@ -58,9 +120,9 @@ class PlacementResult(LayoutResult):
     status: int
     message: str
     initial: list[InitialLayout]
-    validation: dict[str, Any]
+    validation: Validation | None
     timings: dict[str, float]
-    settings: dict[str, Any]
+    settings: PlanSettings
     pso: PSOResult | None = field(default=None, repr=False)
     finalists: list[dict[str, Any]] = field(default_factory=list)
     phases: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -69,7 +131,7 @@ class PlacementResult(LayoutResult):
     def availability(self) -> float:
         """The validated share of node realizations with a position fix at the evaluation
         nodes (NaN without a validation); 1 − it is the share of the zone without a fix."""
-        return float((self.validation or {}).get("availability", math.nan))
+        return math.nan if self.validation is None else float(self.validation.availability)
 
     def to_dict(self) -> dict[str, Any]:
         """The plan as plain JSON types (``kind`` "plan"); :meth:`from_dict` reads it back."""
@@ -92,10 +154,10 @@ class PlacementResult(LayoutResult):
             "finalists": [
                 {**f, "anchors": np.asarray(f["anchors"]).tolist()} for f in self.finalists
             ],
-            "validation": self.validation,
+            "validation": {} if self.validation is None else self.validation.to_dict(),
             "timings": self.timings,
             "phases": self.phases,
-            "settings": self.settings,
+            "settings": self.settings.to_dict(),
             "costs": None if self.pso is None else np.asarray(self.pso.costs).tolist(),
         }
 
@@ -140,12 +202,27 @@ class PlacementResult(LayoutResult):
             status=int(d.get("status", 0)),
             message=d.get("message", ""),
             initial=initial,
-            validation=d.get("validation", {}),
+            validation=Validation.from_dict(d.get("validation")),
             timings=d.get("timings", {}),
             phases=d.get("phases", {}),
-            settings=d.get("settings", {}),
+            settings=PlanSettings.from_dict(d.get("settings", {})),
             finalists=finalists,
         )
+
+    @classmethod
+    def read(cls, result_dir) -> PlacementResult:
+        """The plan in a result folder's ``result.json``, read by the one reader of result
+        folders, :func:`analysis.report_data.load_results` (which the report, ``export``,
+        ``sheet`` and ``stress`` use too); ValueError when the folder has no plan."""
+        from analysis.report_data import RESULT_FILE, load_results
+
+        try:
+            data = load_results(result_dir)["result"]
+        except FileNotFoundError as exc:
+            raise ValueError(str(exc)) from None
+        if data is None:
+            raise ValueError(f"RESULT_DIR: {result_dir} has no {RESULT_FILE}")
+        return cls.from_dict(data)
 
     def to_json(self, **kw) -> str:
         """Strict JSON (non-finite numbers become null)."""

@@ -1,7 +1,7 @@
 """The random streams of a plan: one independent stream per phase, from the run's seed.
 
 ``seed_then_pso(rng=seed)`` draws everything from ``seed`` (its int entropy, recorded in
-``settings["seed"]``): each phase takes the int seed :func:`phase_seed` of its own stream,
+``settings.seed``): each phase takes the int seed :func:`phase_seed` of its own stream,
 so that a phase's draws do not depend on how many numbers another phase drew, serially or
 on any number of workers.
 """

@@ -66,6 +66,184 @@ class ValidationOptions:
         checks.choice("precision", self.precision, ("float64", "float32"))
 
 
+@dataclass(frozen=True)
+class ErrorSummary:
+    """Euclidean position errors summarized over the fixes: σ (population), mean, P95 and
+    RMS (m), ``n`` fixes, ``n_invalid`` realizations without one, and the availability,
+    n / (n + n_invalid) (:func:`simulation.statistics.error_stats`)."""
+
+    std: float
+    mean: float
+    p95: float
+    rms: float
+    n: int
+    n_invalid: int
+    availability: float
+
+    def summary_dict(self) -> dict[str, Any]:
+        """The seven figures as a plain dict, in the order above."""
+        return {k: getattr(self, k) for k in _SUMMARY_KEYS}
+
+    @staticmethod
+    def summary_from(d: dict[str, Any]) -> dict[str, Any]:
+        """The seven figures' keyword arguments from a JSON block (nulls as NaN)."""
+        return {k: _num(d.get(k), int if k.startswith("n") else float) for k in _SUMMARY_KEYS}
+
+
+@dataclass(frozen=True)
+class NodesSummary(ErrorSummary):
+    """One held-out node set's errors and its ``nodes`` count."""
+
+    nodes: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**self.summary_dict(), "nodes": self.nodes}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NodesSummary:
+        return cls(**cls.summary_from(d), nodes=int(d["nodes"]))
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """The held-out check: ``realizations`` per node at the held-out ``grid`` and at the
+    ``random`` points (:class:`NodesSummary` each)."""
+
+    realizations: int
+    grid: NodesSummary
+    random: NodesSummary
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"realizations": self.realizations, "grid": self.grid.to_dict(),
+                "random": self.random.to_dict()}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> HeldOut:
+        return cls(int(d["realizations"]), NodesSummary.from_dict(d["grid"]),
+                   NodesSummary.from_dict(d["random"]))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MountingCheck(ErrorSummary):
+    """The mounting-error check: the errors at the evaluation nodes over ``draws``
+    mountings within ``tolerance_m`` of the plan."""
+
+    tolerance_m: float
+    draws: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"tolerance_m": self.tolerance_m, "draws": self.draws, **self.summary_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> MountingCheck:
+        return cls(**cls.summary_from(d), tolerance_m=float(d["tolerance_m"]),
+                   draws=int(d["draws"]))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class FieldCheck(ErrorSummary):
+    """The field check: ``draws`` of ``tags_per_draw`` random tags with the anchors mounted
+    within ``tolerance_m`` of the plan."""
+
+    draws: int
+    tags_per_draw: int
+    tolerance_m: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
+                "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> FieldCheck:
+        return cls(**cls.summary_from(d), draws=int(d["draws"]),
+                   tags_per_draw=int(d["tags_per_draw"]),
+                   tolerance_m=float(d["tolerance_m"]))  # fmt: skip
+
+
+#: the per-node figures of the grid check
+PER_NODE_KEYS = ("availability", "rmse", "std", "dop", "dop_rms")
+
+
+@dataclass(frozen=True, eq=False)  # arrays: compare ``to_dict()``
+class Validation:
+    """What :func:`validate_layout` found (the ``validation`` of ``result.json``).
+
+    The grid check: ``realizations`` noise realizations at the evaluation nodes from the
+    int ``seed``; ``std``, ``mean``, ``p95``, ``rms`` (m) over the fixes among the R · P
+    errors, ``n_invalid`` without a fix and the ``availability``; ``mean_peb`` (m, √tr J⁻¹
+    at the constant σ of ``peb_definition``); ``per_node`` (P,) arrays by
+    :data:`PER_NODE_KEYS` (availability, RMSE, σ, the paper's DOP, the RMS-based DOP);
+    ``errors`` (R, P) m, NaN without a fix. Then the other checks that ran (None
+    otherwise): ``held_out``, ``mounting``, ``field``; and a ``message`` when some
+    realizations have no fix or some errors are not finite.
+    """
+
+    realizations: int
+    seed: int
+    std: float
+    mean: float
+    p95: float
+    rms: float
+    n_invalid: int
+    availability: float
+    mean_peb: float
+    peb_definition: str
+    per_node: dict[str, np.ndarray]
+    errors: np.ndarray
+    held_out: HeldOut | None = None
+    mounting: MountingCheck | None = None
+    field: FieldCheck | None = None
+    message: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plain-JSON form (errors rounded to the µm)."""
+        out: dict[str, Any] = {
+            k: getattr(self, k)
+            for k in ("realizations", "seed", "std", "mean", "p95", "rms", "n_invalid",
+                      "availability", "mean_peb", "peb_definition")
+        }  # fmt: skip
+        out["per_node"] = {k: np.asarray(v).tolist() for k, v in self.per_node.items()}
+        out["errors"] = np.round(np.asarray(self.errors, dtype=float), 6).tolist()
+        for key in ("held_out", "mounting", "field"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key).to_dict()
+        if self.message is not None:
+            out["message"] = self.message
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> Validation | None:
+        """Read back :meth:`to_dict` (None for an empty or absent block)."""
+        if not d:
+            return None
+        blocks = {"held_out": HeldOut, "mounting": MountingCheck, "field": FieldCheck}
+        return cls(
+            realizations=int(d["realizations"]),
+            seed=int(d["seed"]),
+            **{k: _num(d.get(k)) for k in ("std", "mean", "p95", "rms", "availability",
+                                           "mean_peb")},
+            n_invalid=int(d.get("n_invalid", 0)),
+            peb_definition=str(d.get("peb_definition", "")),
+            per_node={k: _array(v) for k, v in d.get("per_node", {}).items()},
+            errors=_array(d.get("errors", [])),
+            **{k: c.from_dict(d[k]) for k, c in blocks.items() if d.get(k)},
+            message=d.get("message"),
+        )  # fmt: skip
+
+
+_SUMMARY_KEYS = ("std", "mean", "p95", "rms", "n", "n_invalid", "availability")
+
+
+def _num(v, kind=float):
+    """A JSON number (null: NaN for a float)."""
+    return math.nan if v is None and kind is float else kind(v)
+
+
+def _array(v) -> np.ndarray:
+    """A JSON array of numbers (nulls as NaN)."""
+    return np.array(v, dtype=float)
+
+
 def summary(errors) -> dict[str, float]:
     """σ (population), mean, P95 and RMS (m) of the fixes among Euclidean errors, how many,
     and the availability, the share of node realizations with a fix
@@ -162,15 +340,9 @@ def validate_layout(
     sigma: float = DEFAULT_SIGMA,
     executor: Executor | None = None,
     progress=None,
-) -> dict[str, Any]:
-    """The four checks of the module docstring for anchors (M, 3), as a plain dict.
-
-    Keys: ``realizations``, ``seed``, ``std``, ``mean``, ``p95``, ``rms`` (m, the grid
-    check over the fixes among all R · P errors), ``availability`` (the share of the R · P
-    with a fix; every summary has one), ``mean_peb`` (m, √tr J⁻¹ at constant ``sigma``),
-    ``per_node`` (availability, RMSE, σ, the paper's DOP and the RMS-based DOP per node),
-    ``errors`` (R, P; NaN: no fix); ``held_out`` with ``grid`` and ``random`` summaries;
-    ``mounting`` and ``field`` with their summaries. Each check draws its noise from its
+) -> Validation | None:
+    """The four checks of the module docstring for anchors (M, 3): a :class:`Validation`
+    (None with ``options.realizations == 0``). Each check draws its noise from its
     own stream of ``rng`` (an int seed, a numpy Generator drawn once, or None). Checks run
     on ``executor`` when given; the result does not depend on it. ``progress(done,
     total)`` is called as the checks' parts finish.
@@ -181,21 +353,21 @@ def validate_layout(
     a = np.asarray(anchors, dtype=float)
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     if opt.realizations == 0:
-        return {}
+        return None
     calls = _calls(room, a, nodes, opt, mount_tolerance, seed)
     flat = [c for group in calls.values() for c in group]
     results = iter(run_calls(executor, flat, progress=progress))
     jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
-    out = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
-    out.update(_other_blocks(jobs, opt, mount_tolerance))
-    if out["availability"] < 1:
-        out["message"] = (
-            f"{100 * (1 - out['availability']):.2f} % of the node realizations have no fix "
+    grid = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
+    message = None
+    if grid["availability"] < 1:
+        message = (
+            f"{100 * (1 - grid['availability']):.2f} % of the node realizations have no fix "
             "(fewer than 4 anchors heard); the statistics are over the fixes"
         )
-    elif not math.isfinite(out["std"]):
-        out["message"] = "some position errors are not finite"
-    return out
+    elif not math.isfinite(grid["std"]):
+        message = "some position errors are not finite"
+    return Validation(**grid, **_other_blocks(jobs, opt, mount_tolerance), message=message)
 
 
 def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) -> dict:
@@ -225,7 +397,7 @@ def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) 
 
 
 def _grid_block(parts, a, nodes, opt: ValidationOptions, seed: int, sigma) -> dict[str, Any]:
-    """The grid check's keys from its evaluations ``parts``."""
+    """The grid check's fields of :class:`Validation` from its evaluations ``parts``."""
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
     return {
@@ -235,37 +407,44 @@ def _grid_block(parts, a, nodes, opt: ValidationOptions, seed: int, sigma) -> di
         "mean_peb": float(np.mean(peb(a, nodes, sigma))),
         "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
         "per_node": {
-            "availability": np.mean(np.isfinite(e), axis=0).tolist(),
-            "rmse": node_rmse(e).tolist(),
-            "std": node_std(e).tolist(),
-            "dop": dop(e, range_errors).tolist(),
-            "dop_rms": dop_rms(e, range_errors).tolist(),
+            "availability": np.mean(np.isfinite(e), axis=0),
+            "rmse": node_rmse(e),
+            "std": node_std(e),
+            "dop": dop(e, range_errors),
+            "dop_rms": dop_rms(e, range_errors),
         },
-        "errors": np.round(e, 6).tolist(),
+        "errors": e,
     }
 
 
 def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[str, Any]:
-    """The ``held_out``, ``mounting`` and ``field`` keys of the checks that ran."""
+    """The ``held_out``, ``mounting`` and ``field`` checks that ran."""
     out: dict[str, Any] = {}
     if "held_grid" in jobs:
         (g,), (r,) = jobs["held_grid"], jobs["held_random"]
-        out["held_out"] = {
-            "realizations": int(opt.held_out_realizations),
-            "grid": {**summary(g.errors), "nodes": int(len(g.nodes))},
-            "random": {**summary(r.errors), "nodes": int(len(r.nodes))},
-        }
+        out["held_out"] = HeldOut(
+            int(opt.held_out_realizations),
+            NodesSummary(**summary(g.errors), nodes=int(len(g.nodes))),
+            NodesSummary(**summary(r.errors), nodes=int(len(r.nodes))),
+        )
     if "mounting" in jobs:
-        out["mounting"] = {"tolerance_m": float(tolerance), "draws": int(opt.mount_draws),
-                           **summary(np.concatenate(jobs["mounting"]))}  # fmt: skip
+        mounting = summary(np.concatenate(jobs["mounting"]))
+        out["mounting"] = MountingCheck(**mounting, tolerance_m=float(tolerance),
+                                        draws=int(opt.mount_draws))  # fmt: skip
     if "field" in jobs:
-        out["field"] = {"draws": int(opt.field_draws), "tags_per_draw": int(opt.random_nodes),
-                        "tolerance_m": float(tolerance),
-                        **summary(np.concatenate(jobs["field"]))}  # fmt: skip
+        out["field"] = FieldCheck(**summary(np.concatenate(jobs["field"])),
+                                  draws=int(opt.field_draws), tags_per_draw=int(opt.random_nodes),
+                                  tolerance_m=float(tolerance))  # fmt: skip
     return out
 
 
 __all__ = [
+    "ErrorSummary",
+    "FieldCheck",
+    "HeldOut",
+    "MountingCheck",
+    "NodesSummary",
+    "Validation",
     "ValidationOptions",
     "field_errors",
     "held_out_grid",

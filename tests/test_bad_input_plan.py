@@ -55,7 +55,7 @@ def test_seed_then_pso_counts_and_numbers(name, make):
 def test_options_are_honoured_not_overridden_by_the_defaults():
     kw = {k: v for k, v in TINY.items() if k != "swarm"}
     res = seed_then_pso(ROOM, 4, swarm=PSOOptions(particles=4, iterations=2), **kw)
-    assert res.phases["pso"]["nfev"] == 8 and res.settings["swarm"]["particles"] == 4
+    assert res.phases["pso"]["nfev"] == 8 and res.settings.swarm.particles == 4
 
 
 def test_options_must_be_pso_options():
@@ -137,7 +137,7 @@ def test_resume_skips_the_search(tmp_path, monkeypatch):
     again = seed_then_pso(ROOM, 4, **kw)
     np.testing.assert_array_equal(first.anchors, again.anchors)
     assert [s.name for s in first.initial] == [s.name for s in again.initial]
-    assert again.settings["search_result"]["resumed"]
+    assert again.settings.search_result["resumed"]
 
 
 def test_room_none_is_the_default_room_and_anything_else_is_refused():

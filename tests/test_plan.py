@@ -75,11 +75,13 @@ def test_seed_then_pso_simulated_chain_and_its_phases():
     assert set(res.timings) >= {"search", "pso", "finalists", "validation", "total"}
     n = {k: p["nfev"] for k, p in res.phases.items()}
     assert n["search"] > 0 and n["pso"] == 8 and res.nfev == sum(n.values())
-    assert n["validation"] == 2 + 2 * 1 + 2  # grid, held-out grid and points, mounting
+    # grid, held-out grid and points, mounting and field draws
+    assert n["validation"] == 2 + 2 * 1 + 2 + QUICK.field_draws
     v = res.validation
-    assert v["realizations"] == 2 and np.shape(v["errors"]) == (2, len(NODES))
-    assert v["std"] == pytest.approx(np.std(v["errors"]), abs=1e-5)
-    assert set(v["held_out"]) >= {"grid", "random"} and v["mounting"]["draws"] == 2
+    assert v.realizations == 2 and np.shape(v.errors) == (2, len(NODES))
+    assert v.std == pytest.approx(np.std(v.errors), abs=1e-5)
+    assert v.held_out.grid.nodes > 0 and v.mounting.draws == 2
+    assert v.field.draws == QUICK.field_draws
     json.loads(res.to_json())
 
 
@@ -107,7 +109,7 @@ def test_the_finalists_draws_are_new_noise_at_the_exact_nodes_unless_asked_other
 
     none = ValidationOptions(realizations=0)
     res = _plan(finalists=FinalistOptions(draws=3), validation=none)
-    assert res.settings["finalists"] == {"count": 1, "draws": 3, "exact_draws": None}
+    assert res.settings.finalists == FinalistOptions(count=1, draws=3, exact_draws=None)
     assert [d["cost"] for d in res.finalists] == [fresh(3, 3)(d["anchors"]) for d in res.finalists]
     mixed = _plan(finalists=FinalistOptions(draws=3, exact_draws=1), validation=none)
     assert [d["cost"] for d in mixed.finalists] == [
@@ -133,13 +135,13 @@ def test_same_result_serially_and_with_an_executor():
     with ThreadPoolExecutor(2) as ex:
         b = _plan(rng=5, executor=ex)
     np.testing.assert_array_equal(a.anchors, b.anchors)
-    assert a.validation["std"] == b.validation["std"]
-    assert a.validation["held_out"] == b.validation["held_out"]
+    assert a.validation.std == b.validation.std
+    assert a.validation.held_out == b.validation.held_out
 
 
 def test_the_swarm_options_are_honoured_and_checked():
     res = _plan(swarm=placement.PSOOptions(4, 2))
-    assert res.phases["pso"]["nfev"] == 8 and res.settings["swarm"]["particles"] == 4
+    assert res.phases["pso"]["nfev"] == 8 and res.settings.swarm.particles == 4
     with pytest.raises(ValueError, match="^swarm: must be a PSOOptions"):
         _plan(swarm={"particles": 4})
     with pytest.raises(ValueError, match=r"^finalists.count: must be an integer in \[1, 4\]"):
@@ -161,8 +163,8 @@ def test_each_refined_layout_is_refined_on_its_own_columns():
 
 def test_the_mounting_tolerance_is_set_once_and_reaches_every_stage():
     res = _plan(search=dataclasses.replace(SMALL, mount_tolerance=0.0), swarm=_swarm(4, 1))
-    assert res.settings["search"]["mount_tolerance"] == 0.0 == res.settings["mount_tolerance"]
-    assert "mounting" not in res.validation  # nothing to check with exact mounting
+    assert res.settings.search.mount_tolerance == 0.0 == res.settings.mount_tolerance
+    assert res.validation.mounting is None  # nothing to check with exact mounting
     t = range_table(ROOM, ROOM.corners_layout(), NODES, draws=2, exact_draws=1,
                     mount_tolerance=0.03, rng=0)  # fmt: skip
     with pytest.raises(ValueError, match="table: built with mount_tolerance 0.03"):
@@ -189,11 +191,11 @@ def test_validation_checks_are_reproducible_and_independent_of_the_executor():
     v1 = validate_layout(ROOM, a, rng=3, options=QUICK, nodes=NODES)
     with ThreadPoolExecutor(2) as ex:
         v2 = validate_layout(ROOM, a, rng=3, options=QUICK, nodes=NODES, executor=ex)
-    assert v1 == v2
-    assert v1["held_out"]["grid"]["nodes"] == 420
-    assert v1["mounting"]["n"] == 2 * len(NODES)
+    assert v1.to_dict() == v2.to_dict()
+    assert v1.held_out.grid.nodes == 420
+    assert v1.mounting.n == 2 * len(NODES)
     v3 = validate_layout(ROOM, a, rng=4, options=QUICK, nodes=NODES)
-    assert v3["std"] != v1["std"]
+    assert v3.std != v1.std
 
 
 def test_progress_bars_can_be_switched_off(capsys):
@@ -216,9 +218,10 @@ def test_the_field_check_draws_random_tags_and_mounting_error_together():
     v = validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES)
     child = np.random.SeedSequence(3).spawn(5)[4].generate_state(1)[0]
     errors = np.concatenate([field_errors(ROOM, a, 15, 0.03, d, int(child)) for d in range(3)])
-    assert v["field"] == {"draws": 3, "tags_per_draw": 15, "tolerance_m": 0.03, **summary(errors)}
-    assert v["field"]["n"] == 45 and "mounting" not in v
-    assert validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES)["field"] == v["field"]
+    assert v.field.to_dict() == {"draws": 3, "tags_per_draw": 15, "tolerance_m": 0.03,
+                                 **summary(errors)}  # fmt: skip
+    assert v.field.n == 45 and v.mounting is None
+    assert validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES).field == v.field
     # the tags of a draw are random points of the node region, a new set per draw
     t0 = random_nodes(ROOM, len(NODES), np.random.default_rng(0))
     assert ROOM.contains(t0).all() and not np.allclose(t0, NODES)

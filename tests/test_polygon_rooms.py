@@ -303,5 +303,5 @@ def test_a_short_plan_in_the_l_shaped_lab_places_allowed_anchors():
                                   progress=False)  # fmt: skip
     assert res.success and placement.allowed(LAB, res.anchors, tol=1e-6).all()
     assert not LAB.in_obstacle(res.anchors).any() and not LAB.in_keepout(res.anchors).any()
-    for block in (res.validation, res.validation["mounting"]):
-        assert 0 < block["availability"] <= 1
+    for block in (res.validation, res.validation.mounting):
+        assert 0 < block.availability <= 1

@@ -334,18 +334,18 @@ def test_the_plan_scores_availability_first_and_says_so(caplog):
                                       swarm=dataclasses.replace(LOCAL_SWARM, particles=3),
                                       progress=False)  # fmt: skip
     assert "larger than the signal's reach" in caplog.text
-    reach = res.settings["reach"]
+    reach = res.settings.reach
     assert reach["exceeded"] and reach["reach_m"] == pytest.approx(room.reach)
     v = res.validation
-    for block in (v, v["held_out"]["grid"], v["held_out"]["random"], v["mounting"]):
-        assert 0 <= block["availability"] <= 1
+    for block in (v, v.held_out.grid, v.held_out.random, v.mounting):
+        assert 0 <= block.availability <= 1
     # the planned layout hears 4 anchors at more nodes than a layout bunched at one end
     planned = analysis.covered_share(room, res.anchors, room.grid())
     bunched = np.array([[1.0, 0.03, 2.0], [3.0, 0.03, 2.97], [5.0, 3.97, 2.0], [2.0, 3.97, 1.0],
                         [4.0, 2.0, 2.97], [6.0, 0.03, 1.0], [7.0, 3.97, 2.5],
                         [8.0, 2.0, 2.97]])  # fmt: skip
     assert planned > analysis.covered_share(room, bunched, room.grid())
-    assert v["availability"] == 1.0
+    assert v.availability == 1.0
     # the paper's room fits its signal: no warning, nothing exceeded
     from placement.plan import reach_check
 

@@ -90,4 +90,4 @@ def test_a_sweep_row_is_the_plan_for_that_M():
     for row in res.rows:
         plan = placement.seed_then_pso(ROOM, row.M, rng=3, **kw)
         np.testing.assert_array_equal(row.anchors, plan.anchors)
-        assert row.std == plan.validation["std"] and row.p95 == plan.validation["p95"]
+        assert row.std == plan.validation.std and row.p95 == plan.validation.p95

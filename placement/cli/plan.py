@@ -268,7 +268,7 @@ def run(args) -> int:
 def _print_result(res, args) -> None:
     from numpy import array_equal
 
-    search = res.settings.get("search_result") or {}
+    search = res.settings.search_result
     if search.get("resumed"):
         print(f"search: resumed from {args.checkpoint}.search.json")
     for s in res.initial:
@@ -301,36 +301,28 @@ def _print_result(res, args) -> None:
     _print_phases(res)
 
 
-def _print_validation(v: dict) -> None:
-    if not v:
+def _print_validation(v) -> None:
+    """The validation's summary lines, the field check first: what an installation gets."""
+    if v is None:
         return
-    f = v.get("field")
-    if f:  # first: what the installation delivers
-        print(
-            f"field ({f['draws']} draws of {f['tags_per_draw']} random tags, anchors mounted "
-            f"within {100 * f['tolerance_m']:g} cm): sigma {f['std']:.3f} m, mean "
-            f"{f['mean']:.3f} m, P95 {f['p95']:.3f} m" + availability_note(f)
-        )
-    print(
-        f"validation, {v['realizations']} realizations at the {len(v['per_node']['rmse'])} "
-        f"nodes: sigma {v['std']:.3f} m, mean {v['mean']:.3f} m, P95 {v['p95']:.3f} m"
-        + availability_note(v)
-    )
-    h = v.get("held_out")
-    if h:
-        for key, what in (("grid", "held-out grid"), ("random", "random points")):
-            d = h[key]
-            print(
-                f"  {what} ({d['nodes']} nodes): sigma {d['std']:.3f} m, mean {d['mean']:.3f} m, "
-                f"P95 {d['p95']:.3f} m" + availability_note(d)
-            )
-    m = v.get("mounting")
-    if m:
-        print(
-            f"  mounting error <= {100 * m['tolerance_m']:g} cm ({m['draws']} draws): "
-            f"sigma {m['std']:.3f} m, mean {m['mean']:.3f} m, P95 {m['p95']:.3f} m"
-            + availability_note(m)
-        )
+    if v.field is not None:
+        f = v.field
+        print(f"field ({f.draws} draws of {f.tags_per_draw} random tags, anchors mounted "
+              f"within {100 * f.tolerance_m:g} cm): " + _stats(f))  # fmt: skip
+    print(f"validation, {v.realizations} realizations at the {len(v.per_node['rmse'])} nodes: "
+          + _stats(v))  # fmt: skip
+    if v.held_out is not None:
+        for d, what in ((v.held_out.grid, "held-out grid"), (v.held_out.random, "random points")):
+            print(f"  {what} ({d.nodes} nodes): " + _stats(d))
+    if v.mounting is not None:
+        m = v.mounting
+        print(f"  mounting error <= {100 * m.tolerance_m:g} cm ({m.draws} draws): " + _stats(m))
+
+
+def _stats(s) -> str:
+    """ "sigma … m, mean … m, P95 … m" and the availability of a summary."""
+    return (f"sigma {s.std:.3f} m, mean {s.mean:.3f} m, P95 {s.p95:.3f} m"
+            + availability_note({"availability": s.availability}))  # fmt: skip
 
 
 def _num(x) -> str:
