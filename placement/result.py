@@ -21,18 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-
-def _plain(value: Any) -> Any:
-    """Arrays as (nested) lists, numpy scalars as Python numbers, containers recursively."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    return value
+from placement.serialization import to_jsonable
 
 
 class LayoutResult:
@@ -61,6 +50,7 @@ class LayoutResult:
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-serializable dictionary: every field (arrays as lists; non-finite
         floats kept) and ``fun``."""
-        out = {f.name: _plain(getattr(self, f.name)) for f in dataclasses.fields(self)}
-        out["fun"] = _plain(self.fun)
+        out = {f.name: to_jsonable(getattr(self, f.name), strict=False)
+               for f in dataclasses.fields(self)}  # fmt: skip
+        out["fun"] = to_jsonable(self.fun, strict=False)
         return out

@@ -12,17 +12,18 @@ from typing import Any
 import numpy as np
 
 
-def to_jsonable(obj: Any) -> Any:
-    """Numpy arrays and scalars to lists and floats; non-finite floats to None (strict JSON)."""
+def to_jsonable(obj: Any, strict: bool = True) -> Any:
+    """Numpy arrays and scalars to lists and Python numbers, containers recursively;
+    ``strict``: non-finite floats to None (strict JSON), else kept."""
     if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
+        return {str(k): to_jsonable(v, strict) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
+        return [to_jsonable(v, strict) for v in obj]
     if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
+        return to_jsonable(obj.tolist(), strict)
     if isinstance(obj, np.generic):
-        return to_jsonable(obj.item())
-    if isinstance(obj, float) and not math.isfinite(obj):
+        return to_jsonable(obj.item(), strict)
+    if strict and isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
 
