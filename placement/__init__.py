@@ -5,6 +5,7 @@ The top layer: imports :mod:`analysis` and :mod:`simulation`, never the reverse.
 
 from placement.anchor_sweep import SweepResult, sweep
 from placement.costs import DrawsCost, PEBCost, SimulatedCost, make_cost
+from placement.effort import EFFORT_NAMES, Effort, effort_options
 from placement.exhaustive import ExhaustiveResult, exhaustive_search
 from placement.finalists import FinalistOptions
 from placement.initial import InitialLayout
@@ -36,6 +37,9 @@ from placement.validation import ValidationOptions
 from placement.workers import WorkerLost, WorkerPool
 
 __all__ = [
+    "EFFORT_NAMES",
+    "Effort",
+    "effort_options",
     "DrawsCost",
     "SearchOptions",
     "SweepResult",

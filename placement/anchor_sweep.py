@@ -148,6 +148,7 @@ def sweep(
     swarm=None,
     finalists=None,
     validation=None,
+    effort: str = "default",
     nodes=None,
     rng=0,
     executor=None,
@@ -177,7 +178,7 @@ def sweep(
         "target_availability", target_availability, low=0.0, high=1.0, low_open=True
     )
     kw = {"cost": cost, "initial": initial, "search": search, "swarm": swarm,
-          "finalists": finalists, "validation": validation, "nodes": nodes,
+          "finalists": finalists, "validation": validation, "effort": effort, "nodes": nodes,
           "executor": executor, "progress": progress}  # fmt: skip
     seed = streams.entropy("rng", rng)
     planners = [Planner(room, M, rng=seed, **kw) for M in counts]  # every argument checked
@@ -207,7 +208,12 @@ def sweep(
         recommended=recommend(rows, target_p95, target_availability),
         target_p95=target_p95,
         room=room,
-        settings={"anchors": counts, "rng": seed, "search": first.search.__dict__},
+        settings={
+            "anchors": counts,
+            "rng": seed,
+            "effort": first.effort.name,
+            "search": first.search.__dict__,
+        },
         timings={"table": t_table, "total": time.perf_counter() - t0},
         target_availability=target_availability,
     )

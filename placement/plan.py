@@ -41,6 +41,7 @@ import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement.costs import DrawsCost, cost_name, is_simulated, make_cost
+from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
 from placement.plan_result import PlacementResult, PlanSettings
@@ -69,6 +70,7 @@ def seed_then_pso(
     swarm: PSOOptions | None = None,
     finalists: FinalistOptions | None = None,
     validation: ValidationOptions | None = None,
+    effort: str = "default",
     nodes=None,
     rng=0,
     executor: Executor | None = None,
@@ -89,15 +91,17 @@ def seed_then_pso(
     initial : the swarm's starting layouts: "auto" (the search's optima for a simulated
         cost; relaxations and their refinements otherwise), None (random particles, the
         paper's unseeded swarm), or layouts (S, M, 3), projected onto the mounting surfaces.
-    search : :class:`placement.simselect.SearchOptions` (None: its defaults): the range
+    search : :class:`placement.simselect.SearchOptions` (None: the preset's): the range
         table, the search, the refinement's lattices, and the scene draws the swarm and
         the finalists share, with ``mount_tolerance``, the radius (m) of the in-plane
         mounting error of every moved draw and of the validation.
     swarm : :class:`placement.pso.PSOOptions` (None: :data:`LOCAL_SWARM` for a simulated
         cost with starting layouts, the paper's ``PSOOptions()`` otherwise).
-    finalists : :class:`placement.finalists.FinalistOptions` (None: its defaults).
-    validation : :class:`placement.validation.ValidationOptions` (None: its defaults;
+    finalists : :class:`placement.finalists.FinalistOptions` (None: the preset's).
+    validation : :class:`placement.validation.ValidationOptions` (None: the preset's;
         ``realizations=0``: no validation).
+    effort : "quick", "default" or "thorough" (:mod:`placement.effort`): the options of
+        ``search``, ``finalists`` and ``validation`` left as None.
     nodes : (P, 3) evaluation nodes (None: ``room.grid()``).
     rng : an int seed (default 0: the same result serially, in parallel and resumed from
         a checkpoint), a numpy Generator (drawn once) or None (fresh entropy); the int used
@@ -111,7 +115,8 @@ def seed_then_pso(
     progress : tqdm progress bars on stderr for every long phase.
     """
     planner = Planner(room, M, cost=cost, initial=initial, search=search, swarm=swarm,
-                      finalists=finalists, validation=validation, nodes=nodes, rng=rng,
+                      finalists=finalists, validation=validation, effort=effort, nodes=nodes,
+                      rng=rng,
                       executor=executor, checkpoint=checkpoint, callback=callback,
                       progress=progress)  # fmt: skip
     return planner.solve()
@@ -152,7 +157,8 @@ class Planner:
     Settings (read-only after construction): ``room``, ``M``, ``cost`` (the name or
     object given), ``cost_fn`` (the cost as ``f(anchors, rng)``), ``label``,
     ``simulated`` (a simulated cost), ``search``, ``swarm``, ``finalists``,
-    ``validation`` (the options objects), ``initial`` (as given), ``nodes``, ``sigma`` (the
+    ``validation`` (the options objects), ``effort`` (the :class:`placement.effort.Effort`
+    preset the options left as None came from), ``initial`` (as given), ``nodes``, ``sigma`` (the
     range σ of the reported PEB), ``seed`` (the run's int entropy), ``executor``,
     ``workers``, ``checkpoint``, ``callback``, ``progress``.
 
@@ -164,18 +170,20 @@ class Planner:
     """
 
     def __init__(self, room, M, *, cost="variance", initial="auto", search=None, swarm=None,
-                 finalists=None, validation=None, nodes=None, rng=0, executor=None,
+                 finalists=None, validation=None, effort="default", nodes=None, rng=0,
+                 executor=None,
                  checkpoint=None, callback=None, progress=True, table=None):  # fmt: skip
         self.room = room = room_or_default(room)
         self.M = checks.count("M", M, low=4, high=MAX_ANCHORS)
         self.cost, self.label, self.simulated = cost, cost_name(cost), is_simulated(cost)
-        self.search = _options("search", search, SearchOptions)
-        self.finalists = _options("finalists", finalists, FinalistOptions)
-        self.validation = _options("validation", validation, ValidationOptions)
+        self.effort = preset = effort_options(effort)
+        self.search = _options("search", search, preset.search)
+        self.finalists = _options("finalists", finalists, preset.finalists)
+        self.validation = _options("validation", validation, preset.validation)
         self.initial = _check_initial(initial)
         if swarm is None:
             swarm = default_swarm(cost, self.initial)
-        self.swarm = _options("swarm", swarm, PSOOptions)
+        self.swarm = _options("swarm", swarm, PSOOptions())
         if self.finalists.count > self.swarm.particles:
             raise ValueError(f"finalists.count: must be an integer in [1, {self.swarm.particles}] "
                              f"(the swarm's particles), got {self.finalists.count}")  # fmt: skip
@@ -380,7 +388,7 @@ class Planner:
         """Every setting of the run, for ``result.json``."""
         initial = self.initial
         return PlanSettings(
-            M=self.M, cost=self.label,
+            M=self.M, cost=self.label, effort=self.effort.name,
             initial="auto" if isinstance(initial, str) else ("none" if initial is None else "user"),
             seed=self.seed, search=self.search,
             search_lattices={"spacing": self.search.spacing_for(self.room),
@@ -404,10 +412,12 @@ class Planner:
             self.nfev[phase] = int(nfev)
 
 
-def _options(name: str, value, cls):
-    """``value`` if it is a ``cls`` (None: ``cls()``); else a ValueError naming ``name``."""
+def _options(name: str, value, default):
+    """``value`` if it is of ``default``'s class (None: ``default``); else a ValueError
+    naming ``name``."""
     if value is None:
-        return cls()
+        return default
+    cls = type(default)
     if not isinstance(value, cls):
         raise ValueError(f"{name}: must be a {cls.__name__} or None, got {checks.describe(value)}")
     return value

@@ -31,7 +31,8 @@ PLACEMENT_STATUS = {
 class PlanSettings:
     """Every setting of a plan (the ``settings`` of ``result.json``).
 
-    M the anchors; cost the cost's name; initial "auto", "none" or "user" (the starting
+    M the anchors; cost the cost's name; effort the preset (:mod:`placement.effort`) of
+    the options not given; initial "auto", "none" or "user" (the starting
     layouts); seed the run's int entropy (:mod:`placement.streams`); search, swarm,
     finalists and validation the options objects used; search_lattices the candidate
     grid's ``spacing`` and the refinement's ``fine_spacings`` (m) in this room;
@@ -41,6 +42,7 @@ class PlanSettings:
 
     M: int
     cost: str
+    effort: str
     initial: str
     seed: int
     search: SearchOptions
@@ -63,7 +65,7 @@ class PlanSettings:
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         for key in ("search", "swarm", "finalists", "validation"):
             out[key] = dataclasses.asdict(out[key])
-        order = [*list(out)[:8], "mount_tolerance", *list(out)[8:]]
+        order = [*list(out)[:9], "mount_tolerance", *list(out)[9:]]
         out["mount_tolerance"] = self.mount_tolerance
         return {k: out[k] for k in order}
 
@@ -76,6 +78,7 @@ class PlanSettings:
         for key, kind in options.items():
             known = {f.name for f in dataclasses.fields(kind)}
             kw[key] = kind(**{k: v for k, v in (d.get(key) or {}).items() if k in known})
+        kw["effort"] = d.get("effort") or "default"  # files before the presets
         kw["search_result"] = d.get("search_result") or {}
         kw["search_lattices"] = d.get("search_lattices") or {}
         kw["reach"] = d.get("reach") or {}

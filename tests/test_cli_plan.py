@@ -18,6 +18,8 @@ def test_plan_end_to_end_with_search_and_simulated_cost(tmp_path, capsys):
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "validation, 2 realizations at the 270 nodes" in text
+    # the field figure first: what an installation delivers
+    assert -1 < text.index("field (10 draws of 300 random tags") < text.index("validation, 2")
     assert "held-out grid (420 nodes)" in text and "mounting error" in text
     assert "phases: search" in text and "pso" in text and "validation" in text
     res = json.loads((out / "result.json").read_text())

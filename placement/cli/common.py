@@ -180,6 +180,20 @@ def describe_signal(room: Room) -> str:
     )
 
 
+def add_effort_argument(p) -> None:
+    """``--effort``: the preset of the planner's options (:mod:`placement.effort`)."""
+    from placement.effort import EFFORT_NAMES
+
+    p.add_argument(
+        "--effort",
+        choices=EFFORT_NAMES,
+        default="default",
+        help="preset of the search, finalists and validation options: quick (a first answer "
+        "in seconds), default, thorough (minutes); the other flags change single values of "
+        "it (default)",
+    )
+
+
 def availability_note(summary: dict) -> str:
     """ ", availability 99.2 % (0.8 % without a fix)" for a summary with an availability."""
     a = summary.get("availability")

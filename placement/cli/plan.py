@@ -8,6 +8,7 @@ import re
 import time
 
 from placement.cli.common import (
+    add_effort_argument,
     add_room_argument,
     add_signal_arguments,
     apply_signal,
@@ -44,20 +45,20 @@ def register(sub) -> None:
     p.add_argument("--anchors", "-M", type=int, default=8, help="number of anchors M (8)")
     add_room_argument(p)
     p.add_argument("--cost", choices=COST_NAMES, default="variance", help="cost (variance)")
+    add_effort_argument(p)
     p.add_argument("--particles", type=int, help="swarm size (library default)")
     p.add_argument("--iterations", type=int, help="swarm iterations (library default)")
     p.add_argument(
         "--mount-tolerance",
         type=float,
-        default=0.03,
         metavar="M",
         help="radius of the in-plane mounting error scored and validated, m (0.03)",
     )
     p.add_argument(
         "--validate-realizations",
         type=int,
-        default=100,
-        help="noise realizations validating the chosen layout (100; 0: no validation)",
+        help="noise realizations validating the chosen layout (the preset's: quick 8, "
+        "default 100; 0: no validation)",
     )
     p.add_argument(
         "--no-initial",
@@ -71,17 +72,19 @@ def register(sub) -> None:
     p.add_argument(
         "--finalists",
         type=int,
-        default=1,
         help="best distinct swarm layouts scored, with the starting layouts and the refined "
-        "layout, on fresh draws (1)",
+        "layout, on fresh draws (the preset's: 1, thorough 3)",
     )
     p.add_argument(
-        "--finalist-draws", type=int, default=12, help="fresh draws of the finalists (12)"
+        "--finalist-draws",
+        type=int,
+        help="fresh draws of the finalists (the preset's: quick 3, default 12, thorough 24)",
     )
     p.add_argument(
         "--finalist-exact-draws",
         type=int,
-        help="of those, draws at the exact nodes and planned points (default: all)",
+        help="of those, draws at the exact nodes and planned points (the preset's: all, "
+        "thorough 12)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
@@ -155,12 +158,10 @@ def _as_flag(kind: str, exc: ValueError) -> ValueError:
 
 
 def plan_options(args) -> dict:
-    """The library's options objects from the command line's flags (unset: the library's
-    defaults); an error names the flag."""
-    from placement.finalists import FinalistOptions
+    """The library's options objects from the command line's flags: the ``--effort``
+    preset's objects with the values of the flags given; an error names the flag."""
+    from placement.effort import effort_options
     from placement.plan import default_swarm
-    from placement.simselect import SearchOptions
-    from placement.validation import ValidationOptions
 
     initial = None if args.no_initial else "auto"
     given = {
@@ -173,9 +174,10 @@ def plan_options(args) -> dict:
                       "exact_draws": args.finalist_exact_draws},
         "validation": {"realizations": args.validate_realizations},
     }  # fmt: skip
-    base = {"search": SearchOptions(), "swarm": default_swarm(args.cost, initial),
-            "finalists": FinalistOptions(), "validation": ValidationOptions()}  # fmt: skip
-    out = {"initial": initial}
+    preset = effort_options(args.effort)
+    base = {"search": preset.search, "swarm": default_swarm(args.cost, initial),
+            "finalists": preset.finalists, "validation": preset.validation}  # fmt: skip
+    out = {"initial": initial, "effort": args.effort}
     for kind, values in given.items():
         changes = {k: v for k, v in values.items() if v is not None}
         try:
@@ -199,7 +201,7 @@ def _check_args(args, room) -> dict:
     opts = plan_options(args)
     if opts["finalists"].count > opts["swarm"].particles:
         raise ValueError(f"--finalists: must be an integer in [1, {opts['swarm'].particles}] "
-                         f"(the swarm's particles), got {args.finalists}")  # fmt: skip
+                         f"(the swarm's particles), got {opts['finalists'].count}")  # fmt: skip
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=MAX_WORKERS)
     if args.scheduler and args.workers > 0:

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import re
 import time
 
 from placement.cli.common import (
+    add_effort_argument,
     add_room_argument,
     add_signal_arguments,
     apply_signal,
@@ -41,8 +43,11 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument("--workers", type=int, default=0, help="worker processes (0: one per core)")
     p.add_argument(
-        "--validate-realizations", type=int, default=100, help="validation realizations (100)"
+        "--validate-realizations",
+        type=int,
+        help="validation realizations (the preset's: quick 8, default 100)",
     )
+    add_effort_argument(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--out", metavar="DIR", default="anchorplan-sweep", help="output folder")
     p.add_argument(
@@ -139,7 +144,7 @@ def _run_one(args, room, out):
     from analysis.figures import save, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
-    from placement.validation import ValidationOptions
+    from placement.effort import effort_options
 
     counts = [checks.count("--anchors", m, low=4, high=100) for m in parse_counts(args.anchors)]
     if args.target_p95 is not None:
@@ -147,7 +152,10 @@ def _run_one(args, room, out):
     checks.real("--target-availability", args.target_availability, low=0.0, high=1.0, low_open=True)
     checks.count("--seed", args.seed, low=0)
     checks.count("--workers", args.workers, low=0, high=1024)
-    checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
+    validation = effort_options(args.effort).validation
+    if args.validate_realizations is not None:
+        checks.count("--validate-realizations", args.validate_realizations, low=0, high=100_000)
+        validation = dataclasses.replace(validation, realizations=args.validate_realizations)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
@@ -169,7 +177,8 @@ def _run_one(args, room, out):
             target_availability=args.target_availability,
             rng=args.seed,
             executor=executor,
-            validation=ValidationOptions(realizations=args.validate_realizations),
+            validation=validation,
+            effort=args.effort,
             progress=not args.no_progress,
             on_row=report,
         )

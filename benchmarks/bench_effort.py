@@ -1,0 +1,88 @@
+"""The effort presets: what each delivers in the field and at the paper's nodes, and its time.
+
+Run (one command per preset; the opening table of BENCHMARKS.md):
+
+    python benchmarks/bench_effort.py --effort quick --anchors 4 6 8 10 --seeds 10
+    python benchmarks/bench_effort.py --effort default --anchors 4 6 8 10 --seeds 10
+    python benchmarks/bench_effort.py --effort thorough --anchors 4 6 8 10 --seeds 5
+    python benchmarks/bench_effort.py --summary RUNS.jsonl [...]   # the table
+
+Each run is ``seed_then_pso(techtile, M, rng=seed, effort=...)`` on ``--workers`` processes
+(as ``anchorplan plan --anchors M --effort ... --seed ...``), one JSON line: its seconds
+(the plan, and per phase), the field check (random tags, anchors mounted within 3 cm)
+σ / mean / P95, and the validation at the 270 nodes σ / mean / P95 beside the paper's
+Table I. ``--summary`` prints, per preset and M: the field σ and P95 (median and worst
+over the seeds), the 270-node σ and P95 (median and worst) against Table I, how many runs
+beat Table I's σ, and the median seconds per phase.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+from _common import PAPER_TABLE1, emit, read_lines, runs_parser
+
+PHASES = ("search", "pso", "refinement", "finalists", "validation")
+
+
+def run(effort: str, M: int, seed: int, pool) -> None:
+    from placement import seed_then_pso
+
+    t0 = time.perf_counter()
+    res = seed_then_pso(None, M, rng=seed, effort=effort, executor=pool, progress=False)
+    seconds = time.perf_counter() - t0
+    v, f = res.validation, res.validation.field
+    emit("effort", effort=effort, M=M, seed=seed, seconds=seconds,
+         phases={k: p["seconds"] for k, p in res.phases.items()},
+         field={"std": f.std, "mean": f.mean, "p95": f.p95, "availability": f.availability},
+         grid={"std": v.std, "mean": v.mean, "p95": v.p95, "realizations": v.realizations},
+         table1=PAPER_TABLE1.get(M), anchors=res.anchors.tolist())  # fmt: skip
+
+
+def summary(rows: list[dict]) -> None:
+    """The markdown table of finished runs (module docstring)."""
+    med = statistics.median
+    print("| preset | M | runs | field σ median / worst (m) | field P95 median / worst (m) "
+          "| 270-node σ median / worst (m) | Table I σ | beats Table I σ | 270-node P95 "
+          "median / worst (m) | Table I P95 | seconds median (max) | per phase, median s |")  # fmt: skip
+    print("|---" * 12 + "|")
+    keys = sorted({(r["effort"], r["M"]) for r in rows}, key=lambda k: (_order(k[0]), k[1]))
+    for effort, M in keys:
+        rs = [r for r in rows if r["effort"] == effort and r["M"] == M]
+        fs, fp = [r["field"]["std"] for r in rs], [r["field"]["p95"] for r in rs]
+        gs, gp = [r["grid"]["std"] for r in rs], [r["grid"]["p95"] for r in rs]
+        t1 = PAPER_TABLE1.get(M) or {}
+        beats = sum(s < t1.get("std", float("inf")) for s in gs)
+        secs = [r["seconds"] for r in rs]
+        phases = " / ".join(f"{med([r['phases'].get(p, 0) for r in rs]):.1f}" for p in PHASES)
+        print(f"| {effort} | {M} | {len(rs)} | {med(fs):.3f} / {max(fs):.3f} | "
+              f"{med(fp):.3f} / {max(fp):.3f} | {med(gs):.3f} / {max(gs):.3f} | "
+              f"{t1.get('std', float('nan')):.3f} | {beats} of {len(rs)} | "
+              f"{med(gp):.3f} / {max(gp):.3f} | {t1.get('p95', float('nan')):.3f} | "
+              f"{med(secs):.1f} ({max(secs):.1f}) | {phases} |")  # fmt: skip
+    print(f"\nper phase: {' / '.join(PHASES)}")
+
+
+def _order(effort: str) -> int:
+    return ("quick", "default", "thorough").index(effort) if effort in (
+        "quick", "default", "thorough") else 9  # fmt: skip
+
+
+def main() -> None:
+    ap = runs_parser(__doc__, [8], seeds_help="seeds 0 … N−1 (5)")
+    ap.add_argument("--effort", default="default", choices=("quick", "default", "thorough"))
+    args = ap.parse_args()
+    if args.summary:
+        summary(read_lines(args.summary))
+        return
+    from placement.workers import WorkerPool
+
+    with WorkerPool(args.workers) as pool:
+        for M in args.anchors:
+            for seed in range(args.seeds):
+                run(args.effort, M, seed, pool)
+
+
+if __name__ == "__main__":
+    main()
