@@ -1355,9 +1355,10 @@ def sweep_curves(
     dpi: float = 100,
 ) -> Figure:
     """σ, mean and P95 (m) of the validated error against the anchor count M, from rows
-    with keys ``M``, ``std``, ``mean``, ``p95``; the target P95 as a horizontal line and
-    reference points (e.g. the paper's Table I: {M: {"std", "mean", "p95"}}) as hollow
-    markers."""
+    with keys ``M``, ``std``, ``mean``, ``p95`` (at the evaluation nodes, solid) and, when
+    the rows have them, ``field_std``, ``field_mean``, ``field_p95`` (the field check,
+    dashed); the target P95 as a horizontal line and reference points (e.g. the paper's
+    Table I: {M: {"std", "mean", "p95"}}) as hollow markers."""
     fig = new_figure((6.4, 4.0), dpi=dpi)
     ax = fig.add_subplot()
     M = np.array([r["M"] for r in rows], dtype=int)
@@ -1365,6 +1366,11 @@ def sweep_curves(
               ("p95", "P95", "^", PALETTE[2]))  # fmt: skip
     for key, label, marker, color in styles:
         y = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
+        field = np.array([r.get(f"field_{key}") for r in rows], dtype=float)  # None: NaN
+        if np.isfinite(field).any():  # first: what an installation delivers
+            ax.plot(M, field, marker=marker, color=color, linestyle="--",
+                    label=f"field {label}")  # fmt: skip
+            label = f"{label}, evaluation nodes"
         ax.plot(M, y, marker=marker, color=color, label=label)
         if paper:
             pm = sorted(m for m in paper if key in paper[m])

@@ -18,6 +18,7 @@ beat Table I's σ, and the median seconds per phase.
 
 from __future__ import annotations
 
+import dataclasses
 import statistics
 import time
 
@@ -26,14 +27,16 @@ from _common import PAPER_TABLE1, emit, read_lines, runs_parser
 PHASES = ("search", "pso", "refinement", "finalists", "validation")
 
 
-def run(effort: str, M: int, seed: int, pool) -> None:
+def run(effort: str, M: int, seed: int, pool, finalists=None) -> None:
     from placement import seed_then_pso
 
     t0 = time.perf_counter()
-    res = seed_then_pso(None, M, rng=seed, effort=effort, executor=pool, progress=False)
+    res = seed_then_pso(None, M, rng=seed, effort=effort, finalists=finalists, executor=pool,
+                        progress=False)  # fmt: skip
     seconds = time.perf_counter() - t0
     v, f = res.validation, res.validation.field
-    emit("effort", effort=effort, M=M, seed=seed, seconds=seconds,
+    variant = {} if finalists is None else {"finalists": dataclasses.asdict(finalists)}
+    emit("effort", effort=effort, M=M, seed=seed, variant=variant, seconds=seconds,
          phases={k: p["seconds"] for k, p in res.phases.items()},
          field={"std": f.std, "mean": f.mean, "p95": f.p95, "availability": f.availability},
          grid={"std": v.std, "mean": v.mean, "p95": v.p95, "realizations": v.realizations},
@@ -44,19 +47,26 @@ def summary(rows: list[dict]) -> None:
     """The markdown table of finished runs (module docstring)."""
     med = statistics.median
     print("| preset | M | runs | field σ median / worst (m) | field P95 median / worst (m) "
-          "| 270-node σ median / worst (m) | Table I σ | beats Table I σ | 270-node P95 "
-          "median / worst (m) | Table I P95 | seconds median (max) | per phase, median s |")  # fmt: skip
+          "| 270-node σ median / worst (m) | Table I σ | beats Table I σ "
+          "| 270-node P95 median / worst (m) | Table I P95 | seconds median (max) "
+          "| per phase, median s |")  # fmt: skip
     print("|---" * 12 + "|")
-    keys = sorted({(r["effort"], r["M"]) for r in rows}, key=lambda k: (_order(k[0]), k[1]))
-    for effort, M in keys:
-        rs = [r for r in rows if r["effort"] == effort and r["M"] == M]
+
+    def name(r) -> str:
+        v = r.get("variant") or {}
+        return r["effort"] + ("" if not v else f", finalists {v['finalists']}")
+
+    keys = sorted({(name(r), r["effort"], r["M"]) for r in rows},
+                  key=lambda k: (_order(k[1]), k[0], k[2]))  # fmt: skip
+    for label, _, M in keys:
+        rs = [r for r in rows if name(r) == label and r["M"] == M]
         fs, fp = [r["field"]["std"] for r in rs], [r["field"]["p95"] for r in rs]
         gs, gp = [r["grid"]["std"] for r in rs], [r["grid"]["p95"] for r in rs]
         t1 = PAPER_TABLE1.get(M) or {}
         beats = sum(s < t1.get("std", float("inf")) for s in gs)
         secs = [r["seconds"] for r in rs]
         phases = " / ".join(f"{med([r['phases'].get(p, 0) for r in rs]):.1f}" for p in PHASES)
-        print(f"| {effort} | {M} | {len(rs)} | {med(fs):.3f} / {max(fs):.3f} | "
+        print(f"| {label} | {M} | {len(rs)} | {med(fs):.3f} / {max(fs):.3f} | "
               f"{med(fp):.3f} / {max(fp):.3f} | {med(gs):.3f} / {max(gs):.3f} | "
               f"{t1.get('std', float('nan')):.3f} | {beats} of {len(rs)} | "
               f"{med(gp):.3f} / {max(gp):.3f} | {t1.get('p95', float('nan')):.3f} | "
@@ -72,16 +82,24 @@ def _order(effort: str) -> int:
 def main() -> None:
     ap = runs_parser(__doc__, [8], seeds_help="seeds 0 … N−1 (5)")
     ap.add_argument("--effort", default="default", choices=("quick", "default", "thorough"))
+    ap.add_argument("--finalist-exact-draws", type=int, metavar="N",
+                    help="a variant: the preset's finalists with N of their draws exact, "
+                    "the others field-like (moved nodes, mounted anchors)")  # fmt: skip
     args = ap.parse_args()
     if args.summary:
         summary(read_lines(args.summary))
         return
+    from placement.effort import effort_options
     from placement.workers import WorkerPool
 
+    finalists = None
+    if args.finalist_exact_draws is not None:
+        finalists = dataclasses.replace(effort_options(args.effort).finalists,
+                                        exact_draws=args.finalist_exact_draws)  # fmt: skip
     with WorkerPool(args.workers) as pool:
         for M in args.anchors:
             for seed in range(args.seeds):
-                run(args.effort, M, seed, pool)
+                run(args.effort, M, seed, pool, finalists)
 
 
 if __name__ == "__main__":

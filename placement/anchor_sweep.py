@@ -135,6 +135,22 @@ def recommend(rows, target_p95: float | None, target_availability: float) -> int
     return None
 
 
+def _shared_table(first, most: int, seed: int):
+    """The range table the sweep's plans share, built as the plan of ``first`` (a
+    :class:`placement.Planner`) builds it; None for a cost without a table search."""
+    from placement.initial import build_table
+    from placement.surfaces import candidate_grid
+
+    if not (first.simulated and isinstance(first.initial, str)):
+        return None
+    room, opt = first.room, first.search
+    n = len(candidate_grid(room, opt.spacing_for(room)))
+    if n < most:
+        raise ValueError(f"anchors: {most} anchors exceed the {n} candidate points "
+                         f"(spacing {opt.spacing_for(room):g} m) of this room")  # fmt: skip
+    return build_table(room, opt, first.nodes, seed, first.executor, first.progress)
+
+
 def sweep(
     room: Room | None = None,
     anchors=range(4, 11),
@@ -164,9 +180,7 @@ def sweep(
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     on_row : an optional callable ``on_row(M, row)`` called after each M.
     """
-    from placement.initial import build_table
     from placement.plan import Planner
-    from placement.surfaces import candidate_grid
 
     room = room_or_default(room)
     counts = _counts(anchors)
@@ -184,16 +198,7 @@ def sweep(
     planners = [Planner(room, M, rng=seed, **kw) for M in counts]  # every argument checked
     first = planners[0]
     t0 = time.perf_counter()
-    table = None
-    if first.simulated and isinstance(first.initial, str):
-        opt = first.search
-        n = len(candidate_grid(room, opt.spacing_for(room)))
-        if n < max(counts):
-            raise ValueError(
-                f"anchors: {max(counts)} anchors exceed the {n} candidate points "
-                f"(spacing {opt.spacing_for(room):g} m) of this room"
-            )
-        table = build_table(room, opt, first.nodes, seed, executor, progress)
+    table = _shared_table(first, max(counts), seed)
     t_table = time.perf_counter() - t0
     rows = []
     for planner in planners:

@@ -16,7 +16,11 @@ Three checks, each with its own independent noise:
 - **field**: what an installation delivers: in each draw, tags at uniform random points of
   the tag zones (the room's node region without zones) and the anchors mounted within
   ``mount_tolerance``, together, one noise realization; positions solved with the planned
-  points and bounded to the room, as for the mounting error.
+  points, as for the mounting error.
+
+Every check solves positions the same way, as an installed system that knows its room
+would: started inside the room (its centre, or the linear solution when that lies in the
+room), the iterates unbounded (docs/model.md, "Positioning").
 """
 
 from __future__ import annotations
@@ -308,7 +312,7 @@ def mounted_errors(
     """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
     ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
     stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors,
-    bounded to the room (``precision``: the receiver DSP's, None for the default)."""
+    started inside the room (``precision: the receiver DSP's, None for the default)."""
     from simulation.evaluation import DEFAULT_PRECISION, RangingScene
     from simulation.positioning import locate
 

@@ -91,3 +91,20 @@ def test_a_sweep_row_is_the_plan_for_that_M():
         plan = placement.seed_then_pso(ROOM, row.M, rng=3, **kw)
         np.testing.assert_array_equal(row.anchors, plan.anchors)
         assert row.std == plan.validation.std and row.p95 == plan.validation.p95
+
+
+def test_the_sweep_figure_shows_the_field_figures_beside_the_nodes():
+    from analysis.figures import sweep_curves
+    from analysis.paper import TABLE1
+
+    rows = [{"M": m, "std": 0.5, "mean": 0.7, "p95": 1.5, "field_std": 0.6 + m / 100,
+             "field_mean": 0.8, "field_p95": 2.0} for m in (4, 6)]  # fmt: skip
+    ax = sweep_curves(rows, 1.8, TABLE1).axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels[:2] == ["field σ", "σ, evaluation nodes"] and "field P95" in labels
+    dashed = [ln for ln in ax.lines if ln.get_linestyle() == "--" and ln.get_label() == "field σ"]
+    np.testing.assert_allclose(dashed[0].get_ydata(), [0.64, 0.66])
+    # older sweeps without the field check: the nodes' curves alone, named as before
+    old = [{k: r[k] for k in ("M", "std", "mean", "p95")} for r in rows]
+    labels = [t.get_text() for t in sweep_curves(old).axes[0].get_legend().get_texts()]
+    assert labels == ["σ", "mean", "P95"]
