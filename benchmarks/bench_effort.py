@@ -19,6 +19,7 @@ beat Table I's σ, and the median seconds per phase.
 from __future__ import annotations
 
 import dataclasses
+import json
 import statistics
 import time
 
@@ -27,20 +28,28 @@ from _common import PAPER_TABLE1, emit, read_lines, runs_parser
 PHASES = ("search", "pso", "refinement", "finalists", "validation")
 
 
-def run(effort: str, M: int, seed: int, pool, finalists=None) -> None:
+def run(effort: str, M: int, seed: int, pool, variant: dict) -> None:
     from placement import seed_then_pso
 
     t0 = time.perf_counter()
-    res = seed_then_pso(None, M, rng=seed, effort=effort, finalists=finalists, executor=pool,
-                        progress=False)  # fmt: skip
+    res = seed_then_pso(None, M, rng=seed, effort=effort, executor=pool, progress=False,
+                        **variant)  # fmt: skip
     seconds = time.perf_counter() - t0
     v, f = res.validation, res.validation.field
-    variant = {} if finalists is None else {"finalists": dataclasses.asdict(finalists)}
-    emit("effort", effort=effort, M=M, seed=seed, variant=variant, seconds=seconds,
+    changed = {k: _changes(effort, k, v) for k, v in variant.items()}
+    emit("effort", effort=effort, M=M, seed=seed, variant=changed, seconds=seconds,
          phases={k: p["seconds"] for k, p in res.phases.items()},
          field={"std": f.std, "mean": f.mean, "p95": f.p95, "availability": f.availability},
          grid={"std": v.std, "mean": v.mean, "p95": v.p95, "realizations": v.realizations},
          table1=PAPER_TABLE1.get(M), anchors=res.anchors.tolist())  # fmt: skip
+
+
+def _changes(effort: str, phase: str, options) -> dict:
+    """The fields of ``options`` that differ from the preset's options of ``phase``."""
+    from placement.effort import effort_options
+
+    base = dataclasses.asdict(getattr(effort_options(effort), phase))
+    return {k: v for k, v in dataclasses.asdict(options).items() if base[k] != v}
 
 
 def summary(rows: list[dict]) -> None:
@@ -54,7 +63,7 @@ def summary(rows: list[dict]) -> None:
 
     def name(r) -> str:
         v = r.get("variant") or {}
-        return r["effort"] + ("" if not v else f", finalists {v['finalists']}")
+        return r["effort"] + "".join(f", {k} {json.dumps(c)}" for k, c in v.items())
 
     keys = sorted({(name(r), r["effort"], r["M"]) for r in rows},
                   key=lambda k: (_order(k[1]), k[0], k[2]))  # fmt: skip
@@ -82,9 +91,21 @@ def _order(effort: str) -> int:
 def main() -> None:
     ap = runs_parser(__doc__, [8], seeds_help="seeds 0 … N−1 (5)")
     ap.add_argument("--effort", default="default", choices=("quick", "default", "thorough"))
-    ap.add_argument("--finalist-exact-draws", type=int, metavar="N",
-                    help="a variant: the preset's finalists with N of their draws exact, "
-                    "the others field-like (moved nodes, mounted anchors)")  # fmt: skip
+    ap.add_argument(
+        "--finalist-exact-draws",
+        type=int,
+        metavar="N",
+        help="a variant: the preset's finalists with N of their draws exact, "
+        "the others field-like (moved nodes, mounted anchors)",
+    )
+    ap.add_argument(
+        "--search-draws",
+        type=int,
+        metavar="N",
+        help="a variant: the preset's range table with N draws",
+    )
+    ap.add_argument("--search-exact-draws", type=int, metavar="N",
+                    help="a variant: the preset's range table with N exact draws")  # fmt: skip
     args = ap.parse_args()
     if args.summary:
         summary(read_lines(args.summary))
@@ -92,14 +113,22 @@ def main() -> None:
     from placement.effort import effort_options
     from placement.workers import WorkerPool
 
-    finalists = None
+    preset, variant = effort_options(args.effort), {}
     if args.finalist_exact_draws is not None:
-        finalists = dataclasses.replace(effort_options(args.effort).finalists,
-                                        exact_draws=args.finalist_exact_draws)  # fmt: skip
+        variant["finalists"] = dataclasses.replace(
+            preset.finalists, exact_draws=args.finalist_exact_draws
+        )
+    table = {
+        k: v
+        for k, v in (("draws", args.search_draws), ("exact_draws", args.search_exact_draws))
+        if v is not None
+    }
+    if table:
+        variant["search"] = dataclasses.replace(preset.search, **table)  # fmt: skip
     with WorkerPool(args.workers) as pool:
         for M in args.anchors:
             for seed in range(args.seeds):
-                run(args.effort, M, seed, pool, finalists)
+                run(args.effort, M, seed, pool, variant)
 
 
 if __name__ == "__main__":

@@ -70,7 +70,7 @@ def main() -> None:
         for name, conv in CONVENTIONS.items():
             s = summary(errors(room, anchors, scenes, conv))
             emit("positioning_convention", check=check, convention=name, draws=args.draws,
-                 std=s["std"], mean=s["mean"], p95=s["p95"], availability=s["availability"])  # fmt: skip
+                 **{k: s[k] for k in ("std", "mean", "p95", "availability")})  # fmt: skip
 
 
 if __name__ == "__main__":

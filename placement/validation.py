@@ -147,21 +147,28 @@ class MountingCheck(ErrorSummary):
 @dataclass(frozen=True)
 class FieldCheck(ErrorSummary):
     """The field check: ``draws`` of ``tags_per_draw`` random tags with the anchors mounted
-    within ``tolerance_m`` of the plan."""
+    within ``tolerance_m`` of the plan; ``bounded`` the same fixes solved with the
+    iterates kept inside the room (the other positioning convention, stated beside)."""
 
     draws: int
     tags_per_draw: int
     tolerance_m: float
+    bounded: ErrorSummary | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
-                "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
+        out = {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
+               "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
+        if self.bounded is not None:
+            out["bounded"] = self.bounded.summary_dict()
+        return out
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FieldCheck:
+        b = d.get("bounded")
+        bounded = None if b is None else ErrorSummary(**ErrorSummary.summary_from(b))
         return cls(**cls.summary_from(d), draws=int(d["draws"]),
-                   tags_per_draw=int(d["tags_per_draw"]),
-                   tolerance_m=float(d["tolerance_m"]))  # fmt: skip
+                   tags_per_draw=int(d["tags_per_draw"]), tolerance_m=float(d["tolerance_m"]),
+                   bounded=bounded)  # fmt: skip
 
 
 #: the per-node figures of the grid check
@@ -312,25 +319,41 @@ def mounted_errors(
     """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
     ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
     stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors,
-    started inside the room (``precision: the receiver DSP's, None for the default)."""
+    started inside the room (``precision``: the receiver DSP's, None for the default)."""
+    ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream)
+    return _errors(room, anchors, nodes, ranges, bounded=False)
+
+
+def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None) -> np.ndarray:
+    """(2, tags) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
+    random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
+    anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
+    the same draw), one noise realization; row 0 with the positions solved as every
+    check solves them, row 1 with the iterates kept inside the room (``bounded``)."""
+    nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
+    ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, 1)
+    return np.stack([_errors(room, anchors, nodes, ranges, bounded=b) for b in (False, True)])
+
+
+def _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream):
+    """(P, M) ranges of one noise draw with the anchors mounted as in draw ``draw``."""
     from simulation.evaluation import DEFAULT_PRECISION, RangingScene
-    from simulation.positioning import locate
 
     ids = np.arange(len(anchors))
     mounted = mounted_points(room, anchors, ids, draw, tolerance, False, seed)
     scene = RangingScene(room, mounted, nodes, precision=precision or DEFAULT_PRECISION)
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream, draw)))
-    x = locate(anchors, scene.ranges(rng), region=(np.zeros(3), np.asarray(room.size, float)))
-    return np.linalg.norm(x - nodes, axis=-1)
+    return scene.ranges(
+        np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream, draw)))
+    )
 
 
-def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None) -> np.ndarray:
-    """(tags,) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
-    random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
-    anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
-    the same draw), one noise realization."""
-    nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
-    return mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision, stream=1)
+def _errors(room, anchors, nodes, ranges, bounded: bool) -> np.ndarray:
+    """(P,) errors (m) of the positions solved from ``ranges`` with the planned anchors,
+    started inside the room (iterates kept inside it when ``bounded``)."""
+    from simulation.positioning import locate
+
+    region = (np.zeros(3), np.asarray(room.size, float))
+    return np.linalg.norm(locate(anchors, ranges, region=region, bounded=bounded) - nodes, axis=-1)
 
 
 def validate_layout(
@@ -436,7 +459,8 @@ def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[
         out["mounting"] = MountingCheck(**mounting, tolerance_m=float(tolerance),
                                         draws=int(opt.mount_draws))  # fmt: skip
     if "field" in jobs:
-        out["field"] = FieldCheck(**summary(np.concatenate(jobs["field"])),
+        both = np.concatenate(jobs["field"], axis=1)  # (2, draws · tags)
+        out["field"] = FieldCheck(**summary(both[0]), bounded=ErrorSummary(**summary(both[1])),
                                   draws=int(opt.field_draws), tags_per_draw=int(opt.random_nodes),
                                   tolerance_m=float(tolerance))  # fmt: skip
     return out
