@@ -30,10 +30,10 @@ def test_presets_resolve_to_their_documented_values():
     assert quick.finalists.draws == 3 and quick.validation.realizations == 8
     assert quick.validation.held_out_realizations == 0 and quick.validation.field_draws == 3
     assert quick.validation.mount_draws == 2
-    assert thorough.search.draws == 6 and thorough.search.exact_draws == 3
+    assert thorough.search.draws == 6 and thorough.search.exact_draws == 4
     assert thorough.search.chains == 16 and thorough.search.evaluations == 9000
     assert thorough.search.fine_optima == 3
-    assert thorough.finalists == FinalistOptions(count=3, draws=24, exact_draws=12)
+    assert thorough.finalists == FinalistOptions(count=3, draws=24)
     assert thorough.validation.field_draws == 20
     for name in EFFORT_NAMES:
         planner = Planner(ROOM, 8, effort=name, progress=False)

@@ -83,8 +83,7 @@ def register(sub) -> None:
     p.add_argument(
         "--finalist-exact-draws",
         type=int,
-        help="of those, draws at the exact nodes and planned points (the preset's: all, "
-        "thorough 12)",
+        help="of those, draws at the exact nodes and planned points (the preset's: all)",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
