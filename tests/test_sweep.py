@@ -64,6 +64,9 @@ def test_sweep_cli_bad_input_exit_2(tmp_path, capsys):
     assert "--anchors" in capsys.readouterr().err
     assert main(["sweep", "--target-p95", "0", "--out", str(tmp_path)]) == 2
     assert "--target-p95" in capsys.readouterr().err
+    argv = ["sweep", "--effort", "quick", "--validate-realizations", "-1", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    assert "--validate-realizations" in capsys.readouterr().err
 
 
 def test_sweep_report_renders(tmp_path):
