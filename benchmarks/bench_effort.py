@@ -25,6 +25,8 @@ import time
 
 from _common import PAPER_TABLE1, emit, read_lines, runs_parser
 
+from placement.effort import EFFORT_NAMES
+
 PHASES = ("search", "pso", "refinement", "finalists", "validation")
 
 
@@ -66,7 +68,7 @@ def summary(rows: list[dict]) -> None:
         return r["effort"] + "".join(f", {k} {json.dumps(c)}" for k, c in v.items())
 
     keys = sorted({(name(r), r["effort"], r["M"]) for r in rows},
-                  key=lambda k: (_order(k[1]), k[0], k[2]))  # fmt: skip
+                  key=lambda k: (EFFORT_NAMES.index(k[1]), k[0], k[2]))  # fmt: skip
     for label, _, M in keys:
         rs = [r for r in rows if name(r) == label and r["M"] == M]
         fs, fp = [r["field"]["std"] for r in rs], [r["field"]["p95"] for r in rs]
@@ -83,14 +85,9 @@ def summary(rows: list[dict]) -> None:
     print(f"\nper phase: {' / '.join(PHASES)}")
 
 
-def _order(effort: str) -> int:
-    return ("quick", "default", "thorough").index(effort) if effort in (
-        "quick", "default", "thorough") else 9  # fmt: skip
-
-
 def main() -> None:
     ap = runs_parser(__doc__, [8], seeds_help="seeds 0 … N−1 (5)")
-    ap.add_argument("--effort", default="default", choices=("quick", "default", "thorough"))
+    ap.add_argument("--effort", default="default", choices=EFFORT_NAMES)
     ap.add_argument(
         "--finalist-exact-draws",
         type=int,

@@ -2,12 +2,12 @@
 
 Run: python benchmarks/field_conventions.py RUNS.jsonl [...]   (lines of bench_effort.py)
 
-For every run (its anchors, M and seed) the field check of its validation is drawn again,
-exactly as the plan drew it (``validate_layout``'s field stream of the plan's validation
-seed; 10 draws of 300 tags, the anchors mounted within 3 cm), and summarized with the
-positions solved as every figure solves them (started inside the room, unbounded) and with
-the iterates kept inside the room: one JSON line per run, then the medians and worst per
-preset and M.
+For every run (its anchors, M and seed) the field check of its validation is drawn again
+with the plan's validation stream (``validate_layout`` with the default options: 10
+draws of 300 tags, the anchors mounted within 3 cm) and summarized with the positions
+solved as every figure solves them (started inside the room, unbounded) and with the
+iterates kept inside the room (``validation.field.bounded``): one JSON line per run, then
+the medians and worst per preset and M.
 """
 
 from __future__ import annotations
@@ -20,26 +20,25 @@ import numpy as np
 from _common import emit, read_lines
 
 from placement.streams import phase_seed
-from placement.validation import ValidationOptions, field_errors, summary
+from placement.validation import ValidationOptions, validate_layout
 from simulation import Room
+
+#: the field check alone (the grid check's one realization is the least validate_layout runs)
+FIELD_ONLY = ValidationOptions(realizations=1, held_out_realizations=0, mount_draws=0)
 
 
 def main() -> None:
-    room, opt = Room.techtile(), ValidationOptions()
+    room = Room.techtile()
     out: dict[tuple, list] = {}
     for r in read_lines(sys.argv[1:]):
-        seed = phase_seed(r["seed"], "validation")
-        # the field check's stream, as validate_layout derives it (its fifth child)
-        child = int(np.random.SeedSequence(seed).spawn(5)[4].generate_state(1)[0])
-        a = np.array(r["anchors"])
-        e = np.concatenate([field_errors(room, a, opt.random_nodes, 0.03, d, child)
-                            for d in range(opt.field_draws)], axis=1)  # fmt: skip
-        s, b = summary(e[0]), summary(e[1])
+        v = validate_layout(room, np.array(r["anchors"]), options=FIELD_ONLY,
+                            rng=phase_seed(r["seed"], "validation"))  # fmt: skip
+        f = v.field
         label = r["effort"] + "".join(f", {k} {json.dumps(c)}" for k, c in r["variant"].items())
-        out.setdefault((label, r["M"]), []).append((s["std"], b["std"]))
+        out.setdefault((label, r["M"]), []).append((f.std, f.bounded.std))
         emit("field_conventions", preset=label, M=r["M"], seed=r["seed"],
-             reported_std=r["field"]["std"], std=s["std"], bounded_std=b["std"],
-             p95=s["p95"], bounded_p95=b["p95"])  # fmt: skip
+             reported_std=r["field"]["std"], std=f.std, bounded_std=f.bounded.std,
+             p95=f.p95, bounded_p95=f.bounded.p95)  # fmt: skip
     for (label, M), v in out.items():
         u, b = [x[0] for x in v], [x[1] for x in v]
         print(f"| {label} | {M} | {len(v)} | {statistics.median(u):.3f} / {max(u):.3f} | "

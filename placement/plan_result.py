@@ -62,12 +62,13 @@ class PlanSettings:
     def to_dict(self) -> dict[str, Any]:
         """The plain-JSON form (the options as dicts; ``mount_tolerance`` repeated at the
         top level for readers of the file)."""
-        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
-        for key in ("search", "swarm", "finalists", "validation"):
-            out[key] = dataclasses.asdict(out[key])
-        order = [*list(out)[:9], "mount_tolerance", *list(out)[9:]]
-        out["mount_tolerance"] = self.mount_tolerance
-        return {k: out[k] for k in order}
+        out: dict[str, Any] = {}
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            out[f.name] = dataclasses.asdict(value) if dataclasses.is_dataclass(value) else value
+            if f.name == "swarm":  # where the files have always had it
+                out["mount_tolerance"] = self.mount_tolerance
+        return out
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> PlanSettings:

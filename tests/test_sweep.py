@@ -111,3 +111,17 @@ def test_the_sweep_figure_shows_the_field_figures_beside_the_nodes():
     old = [{k: r[k] for k in ("M", "std", "mean", "p95")} for r in rows]
     labels = [t.get_text() for t in sweep_curves(old).axes[0].get_legend().get_texts()]
     assert labels == ["σ", "mean", "P95"]
+
+
+def test_the_sweep_table_prints_a_dash_for_a_check_that_did_not_run(capsys):
+    from types import SimpleNamespace
+
+    from placement.cli.sweep import _print_table
+
+    nan = float("nan")
+    row = SimpleNamespace(M=4, field_std=0.9, field_p95=2.9, std=0.8, mean=1.0, p95=2.6,
+                          availability=1.0, held_out_std=nan, mounting_std=0.85)  # fmt: skip
+    res = SimpleNamespace(rows=[row], target_availability=0.99, target_p95=None, recommended=4)
+    _print_table(res, None)
+    line = capsys.readouterr().out.splitlines()[1]
+    assert "nan" not in line and line.split()[-2:] == ["–", "0.850"]

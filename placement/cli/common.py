@@ -194,6 +194,15 @@ def add_effort_argument(p) -> None:
     )
 
 
+def number(x, spec: str = ".4g") -> str:
+    """``x`` formatted by ``spec``, or "–" in the spec's width and alignment when there is
+    none (NaN: a check that did not run, a finalist without a swarm cost)."""
+    if x == x:
+        return format(x, spec)
+    width = "".join(c for c in spec.split(".")[0] if c.isdigit())
+    return format("–", ("<" if spec.startswith("<") else ">") + (width or ""))
+
+
 def availability_note(summary: dict) -> str:
     """ ", availability 99.2 % (0.8 % without a fix)" for a summary with an availability."""
     a = summary.get("availability")

@@ -16,6 +16,7 @@ from placement.cli.common import (
     describe_room,
     describe_signal,
     load_room,
+    number,
     output_dir,
     write_json,
 )
@@ -292,8 +293,8 @@ def _print_result(res, args) -> None:
     for f in res.finalists:
         mark = "*" if array_equal(f["anchors"], res.anchors) else " "
         print(
-            f" {mark}finalist {f['source']:<10} swarm cost {_num(f['pso_cost'])}, "
-            f"fresh draws {_num(f['cost'])}"
+            f" {mark}finalist {f['source']:<10} swarm cost {number(f['pso_cost'])}, "
+            f"fresh draws {number(f['cost'])}"
         )
     print("anchors (m):")
     for a in res.anchors:
@@ -326,11 +327,6 @@ def _stats(s) -> str:
     """ "sigma … m, mean … m, P95 … m" and the availability of a summary."""
     return (f"sigma {s.std:.3f} m, mean {s.mean:.3f} m, P95 {s.p95:.3f} m"
             + availability_note({"availability": s.availability}))  # fmt: skip
-
-
-def _num(x) -> str:
-    """A cost for the summary: "–" when there is none (NaN)."""
-    return "–" if x != x else f"{x:.4g}"
 
 
 def _print_phases(res) -> None:

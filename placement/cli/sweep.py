@@ -14,6 +14,7 @@ from placement.cli.common import (
     apply_signal,
     describe_signal,
     load_room,
+    number,
     output_dir,
     write_json,
 )
@@ -204,9 +205,9 @@ def _print_table(res, paper) -> None:
             p = paper[r.M]
             ref = f"   {p['std']:.3f}/{p['mean']:.3f}/{p['p95']:.3f}"
         print(
-            f"{r.M:2d}  {r.field_std:8.3f}/{r.field_p95:<7.3f}  "
+            f"{r.M:2d}  {number(r.field_std, '8.3f')}/{number(r.field_p95, '<7.3f')}  "
             f"{r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}  {100 * r.availability:10.2f} %"
-            f"  {r.held_out_std:14.3f}  {r.mounting_std:14.3f}{ref}"
+            f"  {number(r.held_out_std, '14.3f')}  {number(r.mounting_std, '14.3f')}{ref}"
         )
     goal = f"availability >= {100 * res.target_availability:g} %"
     if res.target_p95 is not None:
