@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
-from placement.rangetable import check_mount_tolerance, range_table, table_errors
+from placement.rangetable import KEEP_IN_ROOM, check_mount_tolerance, range_table, table_errors
 from simulation import checks, degeneracy
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
@@ -35,7 +35,8 @@ class SimulatedCost:
     Each call simulates ``realizations`` noisy realizations of the full chirp pipeline
     (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
     drawn from the given generator, with the receiver DSP in ``precision`` (see
-    :data:`simulation.receiver.DEFAULT_PRECISION`).
+    :data:`simulation.receiver.DEFAULT_PRECISION`), positions kept inside the room
+    (:data:`~placement.rangetable.KEEP_IN_ROOM`).
     """
 
     room: Room = field(default_factory=Room.techtile)
@@ -61,6 +62,7 @@ class SimulatedCost:
             rng=rng,
             nodes=self.nodes,
             precision=self.precision,
+            bounded=KEEP_IN_ROOM,
         )
         return SIMULATED_STATISTICS[self.statistic](np.asarray(ev.errors, dtype=float))
 

@@ -42,6 +42,11 @@ from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
 
+#: The planner's positioning convention (docs/model.md, "Positioning"): positions are solved
+#: as an installed system that knows its room would, started inside the room's box with
+#: every iterate kept inside it. Every figure and every score of the planner uses it.
+KEEP_IN_ROOM = True
+
 
 @dataclass(frozen=True)
 class RangeTable:
@@ -50,7 +55,8 @@ class RangeTable:
     candidates (N, 3) planned points (m); nodes (D, P, 3) the nodes of each draw (m);
     ranges (D, P, N) estimated ranges (m; NaN where the receiver reported none: the
     candidate beyond the signal's reach, or not heard); distances (D, P, N) true ranges from the
-    mounted points (m); region (lo (3,), hi (3,)) the room box where positioning starts.
+    mounted points (m); region (lo (3,), hi (3,)) the room box where positioning starts and
+    stays (:data:`KEEP_IN_ROOM`).
     seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
     """
 
@@ -315,7 +321,9 @@ def _fixes(table: RangeTable, layouts):
 
     S = _layout_indices(table, layouts)
     ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
-    return locate(table.candidates[S], ranges, region=table.region, full_output=True)
+    return locate(
+        table.candidates[S], ranges, region=table.region, bounded=KEEP_IN_ROOM, full_output=True
+    )
 
 
 def _errors(table: RangeTable, fix) -> np.ndarray:

@@ -235,6 +235,8 @@ class SearchOptions:
     fine_spacings : finer lattices (m) added around the best optima, in turn (empty: off);
         None (the default): the candidate spacing halved, and halved again, down to 0.1 m
         (0.2 and 0.1 m from 0.4 m; :meth:`fine_spacings_for`).
+    fine_halvings : with ``fine_spacings`` None, at most this many halvings (None: down to
+        0.1 m; 1: the candidate spacing halved once, 0.2 m from 0.4 m, 0.5 m from 1.0 m).
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
     fine_neighbours : the swap neighbourhood of the descents on a grown table.
     fine_optima : the swarm's best distinct layouts that a plan refines on the fine lattices,
@@ -256,6 +258,7 @@ class SearchOptions:
     evaluations: int = 4500
     finish_neighbours: int = 16
     fine_spacings: tuple[float, ...] | None = None
+    fine_halvings: int | None = None
     fine_steps: int = 1
     fine_neighbours: int = 8
     fine_optima: int = 1
@@ -286,6 +289,8 @@ class SearchOptions:
             object.__setattr__(self, "fine_spacings", tuple(fine))
             for s in self.fine_spacings:
                 checks.real("fine_spacings", s, low=0.01, high=10.0, unit="m")
+        if self.fine_halvings is not None:
+            checks.count("fine_halvings", self.fine_halvings, low=0, high=10)
         checks.count("fine_steps", self.fine_steps, low=1, high=10)
         checks.count("fine_neighbours", self.fine_neighbours, low=1, high=10_000)
         checks.count("fine_optima", self.fine_optima, low=1, high=1000)
@@ -305,11 +310,13 @@ class SearchOptions:
 
     def fine_spacings_for(self, room: Room) -> tuple[float, ...]:
         """The refinement's lattices (m) in ``room``: ``fine_spacings`` when given, else
-        the candidate spacing halved while it stays ≥ :data:`FINEST_SPACING`."""
+        the candidate spacing halved while it stays ≥ :data:`FINEST_SPACING`, at most
+        ``fine_halvings`` times."""
         if self.fine_spacings is not None:
             return self.fine_spacings
         out, s = [], self.spacing_for(room) / 2
-        while s >= FINEST_SPACING - 1e-9:
+        limit = math.inf if self.fine_halvings is None else self.fine_halvings
+        while s >= FINEST_SPACING - 1e-9 and len(out) < limit:
             out.append(round(s, 6))
             s /= 2
         return tuple(out)

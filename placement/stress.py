@@ -14,7 +14,9 @@ receiver assumes, and the anchors are mounted with more or less care.
   the plan (in-plane offsets uniform in a disc, :func:`placement.rangetable.mounted_points`)
   while positioning uses the planned coordinates, over ``draws`` draws.
 
-Every figure is reproducible from ``rng`` (an int seed, a Generator drawn once, or None).
+Positions are solved as the plan's validation solves them, kept inside the room
+(:data:`placement.rangetable.KEEP_IN_ROOM`). Every figure is reproducible from ``rng``
+(an int seed, a Generator drawn once, or None).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from analysis.coverage import covered_share
+from placement.rangetable import KEEP_IN_ROOM
 from placement.validation import mounted_errors, summary
 from simulation import checks, streams
 from simulation.evaluation import RangingScene, evaluate_layout
@@ -63,7 +66,9 @@ def _anchor_down(room: Room, a: np.ndarray, nodes, R: int, seed: int) -> list[di
     rows = []
     for j in range(len(a)):
         rest = np.delete(a, j, axis=0)
-        ev = evaluate_layout(room, rest, realizations=R, rng=seed, nodes=nodes)
+        ev = evaluate_layout(
+            room, rest, realizations=R, rng=seed, nodes=nodes, bounded=KEEP_IN_ROOM
+        )
         rows.append({"anchor": j, **_row(ev.errors),
                      "covered_share": covered_share(room, rest, nodes)})  # fmt: skip
     return rows
@@ -83,7 +88,7 @@ def _temperature(room: Room, a: np.ndarray, nodes, R: int, offsets, seed: int) -
         windows = np.stack([scene.noisy_windows(rng) for _ in range(R)])
         ranges, _ = scene.dsp.detect(windows, c, scene.noise_sigma, air.signal.delays,
                                      scene.distances / air.speed_of_sound)  # fmt: skip
-        x = locate(a, ranges, region=region)
+        x = locate(a, ranges, region=region, bounded=KEEP_IN_ROOM)
         rows.append({"offset": float(dt), "temperature": t,
                      **_row(np.linalg.norm(x - nodes, axis=-1))})  # fmt: skip
     return rows

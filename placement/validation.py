@@ -20,7 +20,9 @@ Three checks, each with its own independent noise:
 
 Every check solves positions the same way, as an installed system that knows its room
 would: started inside the room (its centre, or the linear solution when that lies in the
-room), the iterates unbounded (docs/model.md, "Positioning").
+room), every iterate kept inside the room's box (:data:`placement.rangetable.KEEP_IN_ROOM`;
+docs/model.md, "Positioning"). The field check states the other convention beside its
+figure: the same fixes with unbounded iterates.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
-from placement.rangetable import check_mount_tolerance, mounted_points
+from placement.rangetable import KEEP_IN_ROOM, check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks, streams
 from simulation.room import Room
@@ -147,28 +149,28 @@ class MountingCheck(ErrorSummary):
 @dataclass(frozen=True)
 class FieldCheck(ErrorSummary):
     """The field check: ``draws`` of ``tags_per_draw`` random tags with the anchors mounted
-    within ``tolerance_m`` of the plan; ``bounded`` the same fixes solved with the
-    iterates kept inside the room (the other positioning convention, stated beside)."""
+    within ``tolerance_m`` of the plan; ``unbounded`` the same fixes solved with unbounded
+    iterates (the other positioning convention, stated beside)."""
 
     draws: int
     tags_per_draw: int
     tolerance_m: float
-    bounded: ErrorSummary | None = None
+    unbounded: ErrorSummary | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
                "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
-        if self.bounded is not None:
-            out["bounded"] = self.bounded.summary_dict()
+        if self.unbounded is not None:
+            out["unbounded"] = self.unbounded.summary_dict()
         return out
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FieldCheck:
-        b = d.get("bounded")
-        bounded = None if b is None else ErrorSummary(**ErrorSummary.summary_from(b))
+        u = d.get("unbounded")
+        unbounded = None if u is None else ErrorSummary(**ErrorSummary.summary_from(u))
         return cls(**cls.summary_from(d), draws=int(d["draws"]),
                    tags_per_draw=int(d["tags_per_draw"]), tolerance_m=float(d["tolerance_m"]),
-                   bounded=bounded)  # fmt: skip
+                   unbounded=unbounded)  # fmt: skip
 
 
 #: the per-node figures of the grid check
@@ -309,7 +311,13 @@ def _evaluate(room, anchors, nodes, realizations, seed, precision):
     from simulation.evaluation import evaluate_layout
 
     return evaluate_layout(
-        room, anchors, realizations=realizations, rng=seed, nodes=nodes, precision=precision
+        room,
+        anchors,
+        realizations=realizations,
+        rng=seed,
+        nodes=nodes,
+        precision=precision,
+        bounded=KEEP_IN_ROOM,
     )
 
 
@@ -319,9 +327,9 @@ def mounted_errors(
     """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
     ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
     stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors,
-    started inside the room (``precision``: the receiver DSP's, None for the default)."""
+    kept inside the room (``precision``: the receiver DSP's, None for the default)."""
     ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream)
-    return _errors(room, anchors, nodes, ranges, bounded=False)
+    return _errors(room, anchors, nodes, ranges, bounded=KEEP_IN_ROOM)
 
 
 def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None) -> np.ndarray:
@@ -329,10 +337,11 @@ def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None
     random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
     anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
     the same draw), one noise realization; row 0 with the positions solved as every
-    check solves them, row 1 with the iterates kept inside the room (``bounded``)."""
+    check solves them (kept inside the room), row 1 with unbounded iterates."""
     nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
     ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, 1)
-    return np.stack([_errors(room, anchors, nodes, ranges, bounded=b) for b in (False, True)])
+    conventions = (KEEP_IN_ROOM, not KEEP_IN_ROOM)
+    return np.stack([_errors(room, anchors, nodes, ranges, bounded=b) for b in conventions])
 
 
 def _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream):
@@ -349,7 +358,7 @@ def _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stre
 
 def _errors(room, anchors, nodes, ranges, bounded: bool) -> np.ndarray:
     """(P,) errors (m) of the positions solved from ``ranges`` with the planned anchors,
-    started inside the room (iterates kept inside it when ``bounded``)."""
+    started inside the room (the iterates kept inside it when ``bounded``)."""
     from simulation.positioning import locate
 
     region = (np.zeros(3), np.asarray(room.size, float))
@@ -460,7 +469,7 @@ def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[
                                         draws=int(opt.mount_draws))  # fmt: skip
     if "field" in jobs:
         both = np.concatenate(jobs["field"], axis=1)  # (2, draws · tags)
-        out["field"] = FieldCheck(**summary(both[0]), bounded=ErrorSummary(**summary(both[1])),
+        out["field"] = FieldCheck(**summary(both[0]), unbounded=ErrorSummary(**summary(both[1])),
                                   draws=int(opt.field_draws), tags_per_draw=int(opt.random_nodes),
                                   tolerance_m=float(tolerance))  # fmt: skip
     return out

@@ -9,8 +9,10 @@ An undamped Gauss–Newton diverges on the outlier ranges of a reverberant room.
 Start: the linear least-squares solution of the squared-range differences (subtracting
 the mean equation, ‖x‖² cancels: 2(a_j − ā)ᵀx = (‖a_j‖² − mean‖a‖²) − (ρ_j² − mean ρ²))
 when the anchors are not coplanar and that point lies inside ``region``, else the centre
-of ``region``. Unbounded by default; ``bounded=True`` keeps every iterate in ``region``
-(projected steps).
+of ``region``. Unbounded by default; ``bounded=True`` keeps every iterate in ``region``:
+a coordinate at a bound whose gradient points out of the box is held there while the
+others take the damped step of their own 3 × 3 block (an active set), and every step is
+projected onto the box.
 
 Every node gets a status (modelled on scipy ``least_squares``): 1 gradient small, 2 cost
 change small, 3 step small, 4 zero residual, 0 iteration limit (not converged: the best
@@ -438,8 +440,21 @@ def _residuals(x, a, rho, r, u):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _damped_step(r, u, lam, step):  # pragma: no cover - compiled
-    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors; returns (g0, g1, g2) = Jᵀr."""
+def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
+    """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
+    because the descent direction −Jᵀr points out of the box there."""
+    for k in range(3):
+        g = 0.0
+        for j in range(r.shape[0]):
+            g += r[j] * u[j, k]
+        free[k] = not ((x[k] <= lo[k] and g > 0) or (x[k] >= hi[k] and g < 0))
+
+
+@numba.njit(cache=True)
+def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
+    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
+    (a held one, ``free[k]`` False, gets δ_k = 0); returns (g0, g1, g2) = Jᵀr with the held
+    coordinates' entries zero (the projected gradient)."""
     s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
     for j in range(r.shape[0]):
         u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
@@ -452,6 +467,13 @@ def _damped_step(r, u, lam, step):  # pragma: no cover - compiled
         g0 += r[j] * u0
         g1 += r[j] * u1
         g2 += r[j] * u2
+    # a held coordinate leaves the system: its row and column become the identity's
+    if not free[0]:
+        s00, s01, s02, g0 = 1.0, 0.0, 0.0, 0.0
+    if not free[1]:
+        s11, s01, s12, g1 = 1.0, 0.0, 0.0, 0.0
+    if not free[2]:
+        s22, s02, s12, g2 = 1.0, 0.0, 0.0, 0.0
     s00 += lam
     s11 += lam
     s22 += lam
@@ -480,6 +502,7 @@ def _lm_rows(
     r, u = np.empty(M), np.empty((M, 3))
     rn, un = np.empty(M), np.empty((M, 3))
     x, xn, step = np.empty(3), np.empty(3), np.empty(3)
+    free = np.ones(3, dtype=np.bool_)
     for b in range(R.shape[0]):
         ab, rho = a[owner[b]], R[b]
         x[:] = x0[b]
@@ -488,7 +511,9 @@ def _lm_rows(
         lam, nu = 1e-3, 2.0
         while st == 0 and it < max_iter:
             it += 1
-            g0, g1, g2 = _damped_step(r, u, lam, step)
+            if bounded:
+                _free_coordinates(x, r, u, lo[b], hi[b], free)
+            g0, g1, g2 = _damped_step(r, u, lam, step, free)
             small_g = max(abs(g0), abs(g1), abs(g2)) <= gtol
             for k in range(3):
                 xn[k] = x[k] + step[k]

@@ -26,7 +26,12 @@ def test_presets_resolve_to_their_documented_values():
     # the values placement.effort's docstring names
     assert quick.search.draws == 1 and quick.search.exact_draws == 1
     assert quick.search.chains == 4 and quick.search.evaluations == 1000
-    assert quick.search.fine_spacings == (0.2,)
+    assert quick.search.fine_halvings == 1 and quick.search.fine_spacings is None
+    # one lattice, the candidate spacing halved once, in any room
+    assert quick.search.fine_spacings_for(ROOM) == (0.2,)
+    hall = Room(size=(24.0, 16.0, 6.0), name="hall")
+    assert quick.search.spacing_for(hall) == 0.9 and quick.search.fine_spacings_for(hall) == (0.45,)
+    assert SearchOptions().fine_spacings_for(hall) == (0.45, 0.225, 0.1125)
     assert quick.finalists.draws == 3 and quick.validation.realizations == 8
     assert quick.validation.held_out_realizations == 0 and quick.validation.field_draws == 3
     assert quick.validation.mount_draws == 2
@@ -74,7 +79,7 @@ def test_the_command_line_prints_the_field_figure_first(capsys):
     _print_validation(validate_layout(ROOM, a, rng=0, options=opt, nodes=ROOM.grid()[::9]))
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("field (2 draws of 10 random tags, anchors mounted within 3 cm)")
-    assert lines[1].startswith("  the same fixes with positions kept inside the room: sigma")
+    assert lines[1].startswith("  the same fixes with unbounded positions: sigma")
     assert lines[2].startswith("validation, 2 realizations at the 30 nodes")
 
 

@@ -91,6 +91,26 @@ def test_bounded_keeps_estimates_in_the_box():
     assert np.all(ROOM.contains(box))
 
 
+def test_bounded_converges_to_the_box_constrained_optimum():
+    """With the optimum on the box, the bounded fix converges (no iteration limit) to the
+    minimum scipy's bounded trust-region solver finds from the same start."""
+    rng = np.random.default_rng(5)
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()[::6]
+    r = _ranges(a, nodes) + rng.normal(0, 0.8, (len(nodes), 4))  # outliers: fixes leave the box
+    fix = locate(a, r, region=REGION, bounded=True, full_output=True)
+    assert fix.success and np.all(fix.nit < 100)
+    at_bound = np.any((fix.x <= REGION[0] + 1e-9) | (fix.x >= REGION[1] - 1e-9), axis=1)
+    assert at_bound.mean() > 0.3
+    for p, rho, x0, x in zip(nodes, r, fix.start, fix.x, strict=True):
+        ref = scipy.optimize.least_squares(
+            lambda q, rho=rho: np.linalg.norm(q - a, axis=1) - rho, x0, bounds=REGION,
+            method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12,
+        )  # fmt: skip
+        cost = 0.5 * np.sum((np.linalg.norm(x - a, axis=1) - rho) ** 2)
+        assert cost <= ref.cost + 1e-9 or np.linalg.norm(x - ref.x) < 1e-5, p
+
+
 def test_bad_input():
     a = ROOM.corners_layout()
     with pytest.raises(ValueError, match="ranges"):

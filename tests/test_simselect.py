@@ -83,9 +83,11 @@ def test_draws_move_nodes_within_their_cells_and_anchors_within_the_tolerance():
 
 
 def test_table_errors_are_the_located_nodes_of_every_draw():
+    """The table's errors are the planner's fixes: started in the room, kept inside it."""
     t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, rng=1)
     S = np.array([0, 6, 12, 19])
-    x = simulation.locate(CAND[S], t.ranges[:, :, S], region=REGION)
+    x = simulation.locate(CAND[S], t.ranges[:, :, S], region=REGION, bounded=True)
+    assert np.all((x >= REGION[0]) & (x <= REGION[1]))
     e = np.linalg.norm(x - t.nodes, axis=-1).ravel()
     np.testing.assert_allclose(table_errors(t, S[None])[0], e)
     assert table_cost(t, S, "variance") == pytest.approx(np.var(e))

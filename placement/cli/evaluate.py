@@ -26,8 +26,9 @@ def register(sub) -> None:
         "evaluate",
         help="simulate a layout (chirps, reverberation, noise, DSP, LS positioning)",
         description="Run the full chirp-based reverberant simulation of a layout over the "
-        "room's evaluation grid for R noise realizations and write DIR/evaluation.json with "
-        "the Euclidean error statistics (metres), per-node RMSE and DOP.",
+        "room's evaluation grid for R noise realizations, solve the positions kept inside the "
+        "room as the planner does, and write DIR/evaluation.json with the Euclidean error "
+        "statistics (metres), per-node RMSE and DOP.",
     )
     p.add_argument(
         "--layout", metavar="L.json", required=True, help='{"anchors": [[x, y, z], ...]}'
@@ -45,6 +46,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan evaluate`` on parsed ``args``; the exit status (0: done)."""
+    from placement.rangetable import KEEP_IN_ROOM
     from simulation import evaluate_layout
     from simulation.evaluation import BYTES_PER_RANGE
     from simulation.noise import check_snr
@@ -62,9 +64,8 @@ def run(args) -> int:
         hint="use fewer realizations",
     )
     t0 = time.perf_counter()
-    ev = evaluate_layout(
-        room, anchors, realizations=args.realizations, rng=args.seed, snr_db=args.snr
-    )
+    ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed,
+                         snr_db=args.snr, bounded=KEEP_IN_ROOM)  # fmt: skip
     seconds = time.perf_counter() - t0
     data = ev.to_dict()
     data["seconds"] = seconds

@@ -311,8 +311,8 @@ def _print_validation(v) -> None:
         f = v.field
         print(f"field ({f.draws} draws of {f.tags_per_draw} random tags, anchors mounted "
               f"within {100 * f.tolerance_m:g} cm): " + _stats(f))  # fmt: skip
-        if f.bounded is not None:
-            print("  the same fixes with positions kept inside the room: " + _stats(f.bounded))
+        if f.unbounded is not None:
+            print("  the same fixes with unbounded positions: " + _stats(f.unbounded))
     print(f"validation, {v.realizations} realizations at the {len(v.per_node['rmse'])} nodes: "
           + _stats(v))  # fmt: skip
     if v.held_out is not None:
