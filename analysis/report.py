@@ -55,6 +55,7 @@ from analysis.report_data import (
     sim_from_evaluation,
 )
 from simulation import streams
+from simulation.positioning import KEEP_IN_ROOM
 
 logger = logging.getLogger(__name__)
 
@@ -93,7 +94,9 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
             ctx.notes.append(f"{e.name}: not simulated ({exc}).")
             continue
         t = time.perf_counter()
-        ev = evaluate(ctx.room, e.anchors, realizations=R, rng=seed, nodes=ctx.nodes)
+        ev = evaluate(
+            ctx.room, e.anchors, realizations=R, rng=seed, nodes=ctx.nodes, bounded=KEEP_IN_ROOM
+        )  # as the plan's figures (docs/model.md)
         e.fresh = sim_from_evaluation(ev, f"simulated for this report (R = {R})")
         if e.sim is None:
             e.sim = e.fresh

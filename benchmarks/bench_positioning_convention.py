@@ -3,12 +3,13 @@
 Run: python benchmarks/bench_positioning_convention.py [--layout DIR] [--draws 10]
 
 Every figure of a plan solves positions one way: started inside the room (its centre, or
-the linear solution when that lies in the room), iterates unbounded. For the layout of
-``DIR/layout.json`` (default: the committed techtile example) this prints one JSON line
-per convention with σ / mean / P95 (m) on the same ranges:
+the linear solution when that lies in the room), every iterate kept inside the room
+(``simulation.positioning.KEEP_IN_ROOM``). For the layout of ``DIR/layout.json`` (default:
+the committed techtile example) this prints one JSON line per convention with σ / mean /
+P95 (m) on the same ranges:
 
-- ``room-start`` (the project's): ``locate(region=(0, room.size))``;
-- ``room-bounded``: the same, every iterate kept inside the room (``bounded=True``);
+- ``room-bounded`` (the planner's): ``locate(region=(0, room.size), bounded=True)``;
+- ``room-start``: the same start, the iterates unbounded (the simulator's default);
 - ``anchors-start``: no room given, started in the anchors' bounding box (``locate``'s
   default without a region);
 
@@ -32,8 +33,8 @@ from simulation.evaluation import RangingScene
 from simulation.positioning import locate
 
 CONVENTIONS = {
-    "room-start": {"bounded": False, "room": True},
     "room-bounded": {"bounded": True, "room": True},
+    "room-start": {"bounded": False, "room": True},
     "anchors-start": {"bounded": False, "room": False},
 }
 

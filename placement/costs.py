@@ -16,8 +16,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
-from placement.rangetable import KEEP_IN_ROOM, check_mount_tolerance, range_table, table_errors
+from placement.rangetable import check_mount_tolerance, range_table, table_errors
 from simulation import checks, degeneracy
+from simulation.positioning import KEEP_IN_ROOM
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
 
@@ -36,7 +37,7 @@ class SimulatedCost:
     (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
     drawn from the given generator, with the receiver DSP in ``precision`` (see
     :data:`simulation.receiver.DEFAULT_PRECISION`), positions kept inside the room
-    (:data:`~placement.rangetable.KEEP_IN_ROOM`).
+    (:data:`~simulation.positioning.KEEP_IN_ROOM`).
     """
 
     room: Room = field(default_factory=Room.techtile)

@@ -38,14 +38,10 @@ import numpy as np
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
 from simulation import checks, streams
+from simulation.positioning import KEEP_IN_ROOM
 from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
-
-#: The planner's positioning convention (docs/model.md, "Positioning"): positions are solved
-#: as an installed system that knows its room would, started inside the room's box with
-#: every iterate kept inside it. Every figure and every score of the planner uses it.
-KEEP_IN_ROOM = True
 
 
 @dataclass(frozen=True)

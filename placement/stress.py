@@ -15,7 +15,7 @@ receiver assumes, and the anchors are mounted with more or less care.
   while positioning uses the planned coordinates, over ``draws`` draws.
 
 Positions are solved as the plan's validation solves them, kept inside the room
-(:data:`placement.rangetable.KEEP_IN_ROOM`). Every figure is reproducible from ``rng``
+(:data:`simulation.positioning.KEEP_IN_ROOM`). Every figure is reproducible from ``rng``
 (an int seed, a Generator drawn once, or None).
 """
 
@@ -28,11 +28,10 @@ from typing import Any
 import numpy as np
 
 from analysis.coverage import covered_share
-from placement.rangetable import KEEP_IN_ROOM
 from placement.validation import mounted_errors, summary
 from simulation import checks, streams
 from simulation.evaluation import RangingScene, evaluate_layout
-from simulation.positioning import locate
+from simulation.positioning import KEEP_IN_ROOM, locate
 from simulation.room import Room, as_room
 
 #: the default temperature offsets (°C) and mounting tolerances (m)

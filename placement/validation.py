@@ -20,7 +20,7 @@ Three checks, each with its own independent noise:
 
 Every check solves positions the same way, as an installed system that knows its room
 would: started inside the room (its centre, or the linear solution when that lies in the
-room), every iterate kept inside the room's box (:data:`placement.rangetable.KEEP_IN_ROOM`;
+room), every iterate kept inside the room's box (:data:`simulation.positioning.KEEP_IN_ROOM`;
 docs/model.md, "Positioning"). The field check states the other convention beside its
 figure: the same fixes with unbounded iterates.
 """
@@ -35,9 +35,10 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
-from placement.rangetable import KEEP_IN_ROOM, check_mount_tolerance, mounted_points
+from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks, streams
+from simulation.positioning import KEEP_IN_ROOM
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
 

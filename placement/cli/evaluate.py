@@ -46,10 +46,10 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan evaluate`` on parsed ``args``; the exit status (0: done)."""
-    from placement.rangetable import KEEP_IN_ROOM
     from simulation import evaluate_layout
     from simulation.evaluation import BYTES_PER_RANGE
     from simulation.noise import check_snr
+    from simulation.positioning import KEEP_IN_ROOM
 
     out_dir = output_dir("--out", args.out)
     checks.count("--realizations", args.realizations, low=1)
