@@ -187,9 +187,10 @@ class Validation:
     errors, ``n_invalid`` without a fix and the ``availability``; ``mean_peb`` (m, √tr J⁻¹
     at the constant σ of ``peb_definition``); ``per_node`` (P,) arrays by
     :data:`PER_NODE_KEYS` (availability, RMSE, σ, the paper's DOP, the RMS-based DOP);
-    ``errors`` (R, P) m, NaN without a fix. Then the other checks that ran (None
-    otherwise): ``held_out``, ``mounting``, ``field``; and a ``message`` when some
-    realizations have no fix or some errors are not finite.
+    ``errors`` (R, P) m, NaN without a fix; ``unbounded`` the same fixes solved with
+    unbounded iterates (the other positioning convention, stated beside). Then the other
+    checks that ran (None otherwise): ``held_out``, ``mounting``, ``field``; and a
+    ``message`` when some realizations have no fix or some errors are not finite.
     """
 
     realizations: int
@@ -204,6 +205,7 @@ class Validation:
     peb_definition: str
     per_node: dict[str, np.ndarray]
     errors: np.ndarray
+    unbounded: ErrorSummary | None = None
     held_out: HeldOut | None = None
     mounting: MountingCheck | None = None
     field: FieldCheck | None = None
@@ -218,6 +220,8 @@ class Validation:
         }  # fmt: skip
         out["per_node"] = {k: np.asarray(v).tolist() for k, v in self.per_node.items()}
         out["errors"] = np.round(np.asarray(self.errors, dtype=float), 6).tolist()
+        if self.unbounded is not None:
+            out["unbounded"] = self.unbounded.summary_dict()
         for key in ("held_out", "mounting", "field"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key).to_dict()
@@ -240,6 +244,8 @@ class Validation:
             peb_definition=str(d.get("peb_definition", "")),
             per_node={k: _array(v) for k, v in d.get("per_node", {}).items()},
             errors=_array(d.get("errors", [])),
+            unbounded=ErrorSummary(**ErrorSummary.summary_from(d["unbounded"]))
+            if d.get("unbounded") else None,
             **{k: c.from_dict(d[k]) for k, c in blocks.items() if d.get(k)},
             message=d.get("message"),
         )  # fmt: skip
@@ -395,7 +401,7 @@ def validate_layout(
     flat = [c for group in calls.values() for c in group]
     results = iter(run_calls(executor, flat, progress=progress))
     jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
-    grid = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
+    grid = _grid_block(room, jobs["grid"], a, nodes, opt, seed, sigma)
     message = None
     if grid["availability"] < 1:
         message = (
@@ -433,10 +439,12 @@ def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) 
     return calls
 
 
-def _grid_block(parts, a, nodes, opt: ValidationOptions, seed: int, sigma) -> dict[str, Any]:
+def _grid_block(room, parts, a, nodes, opt: ValidationOptions, seed, sigma) -> dict[str, Any]:
     """The grid check's fields of :class:`Validation` from its evaluations ``parts``."""
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
+    ranges = np.concatenate([p.ranges for p in parts])
+    other = _errors(room, a, nodes, ranges, bounded=not KEEP_IN_ROOM)
     return {
         "realizations": int(opt.realizations),
         "seed": int(seed),
@@ -451,6 +459,7 @@ def _grid_block(parts, a, nodes, opt: ValidationOptions, seed: int, sigma) -> di
             "dop_rms": dop_rms(e, range_errors),
         },
         "errors": e,
+        "unbounded": ErrorSummary(**summary(other)),
     }
 
 

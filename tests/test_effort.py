@@ -81,6 +81,7 @@ def test_the_command_line_prints_the_field_figure_first(capsys):
     assert lines[0].startswith("field (2 draws of 10 random tags, anchors mounted within 3 cm)")
     assert lines[1].startswith("  the same fixes with unbounded positions: sigma")
     assert lines[2].startswith("validation, 2 realizations at the 30 nodes")
+    assert lines[3].startswith("  the same fixes with unbounded positions: sigma")
 
 
 def test_the_sweep_takes_the_preset_too():

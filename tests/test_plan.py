@@ -12,7 +12,7 @@ from placement.plan import LOCAL_SWARM, seed_then_pso
 from placement.pso import PSOOptions
 from placement.rangetable import node_draws, range_table, table_errors
 from placement.simselect import SearchOptions
-from placement.validation import ValidationOptions, validate_layout
+from placement.validation import Validation, ValidationOptions, validate_layout
 from simulation import Room
 
 ROOM = Room.techtile()
@@ -205,6 +205,29 @@ def test_progress_bars_can_be_switched_off(capsys):
     err = capsys.readouterr().err
     for phase in ("range table", "search", "PSO", "finalists", "validation"):
         assert phase in err
+
+
+def test_the_grid_check_keeps_positions_in_the_room_and_states_the_unbounded_fixes():
+    """The grid check solves its ranges kept inside the room; ``unbounded`` summarizes the
+    same realizations (the same noise streams) solved with unbounded iterates."""
+    from placement.validation import summary
+    from simulation import evaluate_layout
+
+    a = ROOM.corners_layout()
+    opt = ValidationOptions(realizations=2, held_out_realizations=0, mount_draws=0,
+                            field_draws=0)  # fmt: skip
+    v = validate_layout(ROOM, a, rng=4, options=opt, nodes=NODES)
+    child = int(np.random.SeedSequence(4).spawn(5)[0].generate_state(1)[0])
+    halves = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child).spawn(2)]
+
+    def grid(bounded):
+        runs = [evaluate_layout(ROOM, a, 1, rng=s, nodes=NODES, bounded=bounded) for s in halves]
+        return np.concatenate([ev.errors for ev in runs])
+
+    np.testing.assert_allclose(v.errors, grid(True), rtol=0, atol=1e-12)
+    assert v.unbounded.summary_dict() == summary(grid(False))
+    assert v.unbounded.std != v.std  # the corners layout: some fixes leave the room
+    assert Validation.from_dict(v.to_dict()).unbounded == v.unbounded
 
 
 def test_the_field_check_draws_random_tags_and_mounting_error_together():

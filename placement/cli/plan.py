@@ -315,6 +315,8 @@ def _print_validation(v) -> None:
             print("  the same fixes with unbounded positions: " + _stats(f.unbounded))
     print(f"validation, {v.realizations} realizations at the {len(v.per_node['rmse'])} nodes: "
           + _stats(v))  # fmt: skip
+    if v.unbounded is not None:
+        print("  the same fixes with unbounded positions: " + _stats(v.unbounded))
     if v.held_out is not None:
         for d, what in ((v.held_out.grid, "held-out grid"), (v.held_out.random, "random points")):
             print(f"  {what} ({d.nodes} nodes): " + _stats(d))
