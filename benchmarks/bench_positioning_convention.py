@@ -1,6 +1,7 @@
 """How the positioning convention moves the reported figures (docs/model.md, "Positioning").
 
 Run: python benchmarks/bench_positioning_convention.py [--layout DIR] [--draws 10]
+     python benchmarks/bench_positioning_convention.py --runs RUNS.jsonl [...] [--draws 10]
 
 Every figure of a plan solves positions one way: started inside the room (its centre, or
 the linear solution when that lies in the room), every iterate kept inside the room
@@ -15,6 +16,10 @@ P95 (m) on the same ranges:
 
 for the 270 nodes (``--draws`` noise realizations, exact mounting) and for the field
 check (``--draws`` draws of 300 random tags with the anchors mounted within 3 cm).
+
+``--runs``: for every run of ``bench_effort.py`` (its anchors, preset, M and seed), the 270
+nodes' σ / P95 kept in the room and unbounded on the same ``--draws`` realizations, one
+JSON line per run, then per preset and M the medians and worst.
 """
 
 from __future__ import annotations
@@ -49,12 +54,47 @@ def errors(room, anchors, scenes, conv) -> np.ndarray:
     return np.concatenate(out)
 
 
+def runs(paths: list[str], draws: int) -> None:
+    """The ``--runs`` table (module docstring)."""
+    import statistics
+
+    from _common import read_lines
+
+    room, out = Room.techtile(), {}
+    for r in read_lines(paths):
+        anchors = np.array(r["anchors"])
+        scene = RangingScene(room, anchors, room.grid())
+        pairs = [(scene.nodes, scene.ranges(np.random.default_rng(d))) for d in range(draws)]
+        s = {name: summary(errors(room, anchors, pairs, CONVENTIONS[name]))
+             for name in ("room-bounded", "room-start")}  # fmt: skip
+        row = {n: (v["std"], v["p95"]) for n, v in s.items()}
+        out.setdefault((r["effort"], r["M"]), []).append(row)
+        figures = {f"{n}_{k}": v[k] for n, v in s.items() for k in ("std", "p95")}
+        emit("positioning_convention_runs", effort=r["effort"], M=r["M"], seed=r["seed"],
+             draws=draws, **figures)  # fmt: skip
+    med = statistics.median
+    print("| preset | M | runs | σ kept in the room, median / worst (m) "
+          "| σ unbounded, median / worst (m) | P95 unbounded, median / worst (m) |")  # fmt: skip
+    print("|---|---|---|---|---|---|")
+    for (effort, M), rows in out.items():
+        b, u = [x["room-bounded"][0] for x in rows], [x["room-start"][0] for x in rows]
+        up = [x["room-start"][1] for x in rows]
+        print(
+            f"| {effort} | {M} | {len(rows)} | {med(b):.3f} / {max(b):.3f} | "
+            f"{med(u):.3f} / {max(u):.3f} | {med(up):.3f} / {max(up):.3f} |"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     root = Path(__file__).resolve().parents[1]
     ap.add_argument("--layout", default=str(root / "docs/examples/techtile"))
     ap.add_argument("--draws", type=int, default=10)
+    ap.add_argument("--runs", nargs="+", metavar="JSONL", help="lines of bench_effort.py")
     args = ap.parse_args()
+    if args.runs:
+        runs(args.runs, args.draws)
+        return
     room = Room.techtile()
     anchors = np.array(json.loads(Path(args.layout, "layout.json").read_text())["anchors"])
     grid = RangingScene(room, anchors, room.grid())
