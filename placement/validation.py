@@ -96,6 +96,11 @@ class ErrorSummary:
         """The seven figures' keyword arguments from a JSON block (nulls as NaN)."""
         return {k: _num(d.get(k), int if k.startswith("n") else float) for k in _SUMMARY_KEYS}
 
+    @staticmethod
+    def read(d: dict[str, Any] | None) -> ErrorSummary | None:
+        """An :class:`ErrorSummary` from a JSON block, None for an absent one."""
+        return None if not d else ErrorSummary(**ErrorSummary.summary_from(d))
+
 
 @dataclass(frozen=True)
 class NodesSummary(ErrorSummary):
@@ -167,11 +172,9 @@ class FieldCheck(ErrorSummary):
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FieldCheck:
-        u = d.get("unbounded")
-        unbounded = None if u is None else ErrorSummary(**ErrorSummary.summary_from(u))
         return cls(**cls.summary_from(d), draws=int(d["draws"]),
                    tags_per_draw=int(d["tags_per_draw"]), tolerance_m=float(d["tolerance_m"]),
-                   unbounded=unbounded)  # fmt: skip
+                   unbounded=ErrorSummary.read(d.get("unbounded")))  # fmt: skip
 
 
 #: the per-node figures of the grid check
@@ -244,8 +247,7 @@ class Validation:
             peb_definition=str(d.get("peb_definition", "")),
             per_node={k: _array(v) for k, v in d.get("per_node", {}).items()},
             errors=_array(d.get("errors", [])),
-            unbounded=ErrorSummary(**ErrorSummary.summary_from(d["unbounded"]))
-            if d.get("unbounded") else None,
+            unbounded=ErrorSummary.read(d.get("unbounded")),
             **{k: c.from_dict(d[k]) for k, c in blocks.items() if d.get(k)},
             message=d.get("message"),
         )  # fmt: skip
