@@ -45,6 +45,7 @@ from analysis.statistics import ecdf, error_stats
 from simulation import checks
 from simulation.directivity import aim_vectors
 from simulation.mounting import mounting_surfaces as _mounting_surfaces
+from simulation.output import write_with
 from simulation.room import SURFACES, Room, as_room
 
 #: colour-blind-friendly qualitative palette (Okabe–Ito without black, plus extras)
@@ -130,11 +131,9 @@ def new_figure(figsize=(7.0, 4.5), dpi: float = 100, layout: str | None = "const
 
 
 def save(fig: Figure, path: str | Path, dpi: float | None = None) -> Path:
-    """Write the figure (format from the suffix, e.g. ``.png``); size = figsize × dpi pixels."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi or fig.dpi)
-    return path
+    """Write the figure (format from the suffix, e.g. ``.png``; never half-written,
+    :mod:`simulation.output`); size = figsize × dpi pixels."""
+    return write_with(path, lambda tmp: fig.savefig(tmp, dpi=dpi or fig.dpi))
 
 
 def png_bytes(fig: Figure, dpi: float | None = None, palette: bool = False) -> bytes:

@@ -55,6 +55,7 @@ from analysis.report_data import (
     sim_from_evaluation,
 )
 from simulation import streams
+from simulation.output import write_file
 from simulation.positioning import KEEP_IN_ROOM
 
 logger = logging.getLogger(__name__)
@@ -200,7 +201,7 @@ def _encode_figures(figures: list[Figure], figures_dir) -> None:
         png = png_bytes(f.figure, palette=palette)
         f.uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
         if fdir is not None:
-            (fdir / f"{i:02d}-{_slug(f.title)}.png").write_bytes(png)
+            write_file(fdir / f"{i:02d}-{_slug(f.title)}.png", png)
 
 
 def write_report(
@@ -209,9 +210,7 @@ def write_report(
     """Build the report and write it (default ``result_dir/report.html``); returns the path."""
     rep = build_report(result_dir, **kwargs)
     path = Path(out) if out is not None else Path(result_dir) / "report.html"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(rep.html, encoding="utf-8")
-    return path, rep
+    return write_file(path, rep.html), rep
 
 
 def _slug(title: str) -> str:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from analysis.figures import png_bytes, sweep_curves
 from analysis.paper import TABLE1
+from simulation.output import write_file
 
 
 def _num(v) -> str:
@@ -86,5 +87,4 @@ def write_sweep_report(result_dir, out=None, dpi: float = 100) -> Path:
     result_dir = Path(result_dir)
     data = json.loads((result_dir / "sweep.json").read_text())
     path = Path(out) if out is not None else result_dir / "report.html"
-    path.write_text(sweep_html(data, dpi=dpi))
-    return path
+    return write_file(path, sweep_html(data, dpi=dpi))

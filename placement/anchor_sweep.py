@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from placement import ties
 from placement.serialization import to_jsonable
 from placement.surfaces import MAX_ANCHORS
 from simulation import checks, streams
@@ -130,7 +131,9 @@ def recommend(rows, target_p95: float | None, target_availability: float) -> int
     """The smallest M of ``rows`` whose availability ≥ ``target_availability`` and, with a
     ``target_p95``, whose P95 ≤ it; None when none does."""
     for r in rows:
-        if r.availability >= target_availability and (target_p95 is None or r.p95 <= target_p95):
+        if ties.reaches(r.availability, target_availability) and (
+            target_p95 is None or ties.meets(r.p95, target_p95)
+        ):
             return r.M
     return None
 

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from placement import ties
 from placement.costs import DrawsCost
 from placement.initial import InitialLayout
 from placement.pso import PSOResult
@@ -69,7 +70,7 @@ def best_distinct(res: PSOResult, count: int, exclude=()) -> list[int]:
     finite only), distinct from each other and from the layouts ``exclude``."""
     picked: list[int] = []
     taken = [np.asarray(a, dtype=float) for a in exclude]
-    for i in np.argsort(res.pcost, kind="stable"):
+    for i in ties.order(res.pcost):
         if len(picked) == count or not math.isfinite(res.pcost[i]):
             break
         if not any(np.allclose(res.pbest[i], a) for a in taken):

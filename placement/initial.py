@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
+from placement import ties
 from placement.progress import ProgressBar
 from placement.serialization import fingerprint, write_json_atomic
 from placement.simselect import SearchOptions
@@ -92,7 +93,7 @@ def analytic_initial(
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
     layouts = np.stack([random_layout(room, M, rng) for _ in range(RANDOM_SCREEN)])
     scores = np.mean(peb(layouts, nodes, sigma), axis=-1)
-    for k, i in enumerate(np.argsort(scores)[:RANDOM_KEEP]):
+    for k, i in enumerate(ties.order(scores)[:RANDOM_KEEP]):
         add(f"random-best-{k + 1}", layouts[i])
     return out
 

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
+from placement import resume, ties
 from placement.costs import DrawsCost, cost_name, is_simulated, make_cost
 from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
@@ -195,6 +196,7 @@ class Planner:
         self.checkpoint = (
             None if checkpoint is None else checks.output_path("checkpoint", checkpoint)
         )
+        self.store = None  # the finished phases beside the checkpoint (placement.resume)
         if callback is not None and not callable(callback):
             raise ValueError(
                 f"callback: must be a callable or None, got {checks.describe(callback)}"
@@ -218,6 +220,8 @@ class Planner:
     def solve(self) -> PlacementResult:
         """Run every phase and return the result."""
         self._t0 = self._last = time.perf_counter()
+        if self.checkpoint is not None:
+            self.store = resume.PhaseStore(self.checkpoint, self.identity())
         self.reach = reach_check(self.room, self.nodes)
         self.find_initial()
         self.run_swarm()
@@ -284,6 +288,11 @@ class Planner:
         searched = self.simulated and isinstance(self.initial, str)
         if not (searched and res.success and opt.fine_spacings_for(self.room)):
             return
+        saved = self.store.load("refinement") if self.store else None
+        if saved is not None:  # a rerun of a killed plan: the refinement had finished
+            self.refined = resume.refined_from_json(saved["refined"])
+            self._lap("refinement", saved["nfev"])
+            return
         starts = [res.pbest[i] for i in best_distinct(res, opt.fine_optima)]
         bar = ProgressBar(self.progress, "refinement")
         bar.update(0, len(starts))
@@ -300,6 +309,9 @@ class Planner:
             self.refined += [(f"refined-{k + 1}", a) for a, f, _ in refined if math.isfinite(f)]
             bar.update(k + 1, len(starts))
         bar.close()
+        if self.store:
+            self.store.save("refinement", {"refined": resume.refined_to_json(self.refined),
+                                           "nfev": nfev})  # fmt: skip
         self._lap("refinement", nfev)
 
     def choose(self) -> None:
@@ -313,20 +325,32 @@ class Planner:
             and (fin.count > 1 or self.initial_layouts or self.refined)
         ):
             return
-        # new noise, by default at the exact nodes: the candidates already come from a search
-        # whose draws include moved ones, and the choice among near-equal optima needs draws
-        # that vary little (docs/model.md, "The whole chain: seed_then_pso")
-        fresh = self.draws_cost(fin.draws, fin.exact, key="finalists", nodes_key="finalist_nodes")
-        bar = ProgressBar(self.progress, "finalists")
-        self.finalist_rows = score_finalists(res, self.initial_layouts, fresh, fin.count,
-                                             self.executor, bar.update, self.refined)  # fmt: skip
-        bar.close()
+        saved = self.store.load("finalists") if self.store else None
+        if saved is not None:  # a rerun of a killed plan: the finalists had been scored
+            self.finalist_rows = resume.finalists_from_json(saved)
+        else:
+            self.finalist_rows = self.score_finalists()
         usable = [f for f in self.finalist_rows
                   if math.isfinite(f["cost"]) and not _degenerate(f["anchors"])]  # fmt: skip
-        if usable:
-            best = min(usable, key=lambda f: f["cost"])
+        if usable:  # a near-tie goes to the first in the finalists' order (placement.ties)
+            best = usable[ties.argmin([f["cost"] for f in usable])]
             self.anchors, self.chosen_cost = np.asarray(best["anchors"]), float(best["cost"])
         self._lap("finalists", len(self.finalist_rows) * fin.draws)
+
+    def score_finalists(self) -> list[dict[str, Any]]:
+        """The finalists' rows (:func:`placement.finalists.score_finalists`) on fresh draws:
+        new noise, by default at the exact nodes (the candidates already come from a search
+        whose draws include moved ones, and the choice among near-equal optima needs draws
+        that vary little; docs/model.md, "The whole chain: seed_then_pso")."""
+        fin = self.finalists
+        fresh = self.draws_cost(fin.draws, fin.exact, key="finalists", nodes_key="finalist_nodes")
+        bar = ProgressBar(self.progress, "finalists")
+        rows = score_finalists(self.swarm_result, self.initial_layouts, fresh, fin.count,
+                               self.executor, bar.update, self.refined)  # fmt: skip
+        bar.close()
+        if self.store:
+            self.store.save("finalists", rows)
+        return rows
 
     def validate(self) -> None:
         """The chosen layout's validation (:func:`placement.validation.validate_layout`)."""
@@ -383,6 +407,14 @@ class Planner:
                          mount_tolerance=self.search.mount_tolerance,
                          seed=phase_seed(self.seed, key), statistic=self.cost,
                          precision=self.search.precision)  # fmt: skip
+
+    def identity(self) -> dict[str, Any]:
+        """What identifies the run for its checkpoint: the room, every setting, the nodes."""
+        s = self.settings().to_dict()
+        for key in ("search_result", "reach"):  # outcomes, not settings
+            s.pop(key)
+        nodes = None if self.nodes is None else self.nodes.tolist()
+        return {"room": self.room.to_dict(), "settings": s, "nodes": nodes}
 
     def settings(self) -> PlanSettings:
         """Every setting of the run, for ``result.json``."""

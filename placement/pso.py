@@ -33,6 +33,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from placement import ties
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, write_json_atomic
 from placement.surfaces import MAX_ANCHORS, project, random_layout
@@ -445,7 +446,7 @@ class _Swarm:
 
     @classmethod
     def start(cls, seed: int, x, v, costs, failures: int, counts: dict) -> _Swarm:
-        best = int(np.argmin(costs))
+        best = ties.argmin(costs)
         return cls(
             seed=seed,
             iteration=0,
@@ -527,10 +528,10 @@ class _Swarm:
 
     def record(self, costs: np.ndarray, failures: int, options: PSOOptions) -> None:
         """Update the bests with the costs (K,) of the current positions, and the record."""
-        better = costs < self.pcost
+        better = np.array([ties.improves(c, p) for c, p in zip(costs, self.pcost, strict=True)])
         self.pbest[better], self.pcost[better] = self.x[better], costs[better]
-        i = int(np.argmin(self.pcost))
-        if self.pcost[i] < self.gcost:
+        i = ties.argmin(self.pcost)
+        if ties.improves(self.pcost[i], self.gcost):
             self.gbest, self.gcost = self.pbest[i].copy(), float(self.pcost[i])
         self.iteration += 1
         self.history.append(self.gcost)

@@ -41,6 +41,7 @@ from typing import ClassVar
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
+from placement import ties
 from placement.result import LayoutResult
 from placement.surfaces import allowed, allowed_rectangles, from_uv, mounting_surfaces, to_uv
 from simulation import checks, streams
@@ -292,7 +293,7 @@ def _solve_starts(solver, starts, lbx, ubx, layout, prob: _Problem):
             continue
         cand = layout(x)
         val = _objective_value(peb(cand, prob.nodes, prob.sigma), prob.objective, prob.tau)
-        if np.isfinite(val) and (best is None or val < best[0]):
+        if np.isfinite(val) and (best is None or ties.improves(val, best[0])):
             best = (val, cand, status, success, iters)
     return best, last_status, nfev
 

@@ -54,6 +54,7 @@ from typing import ClassVar
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA
+from placement import ties
 from placement.result import LayoutResult
 from placement.selection import (
     DEFAULT_SPACING,
@@ -377,11 +378,11 @@ def _round(G, w, M, criterion, rng, samples: int, starts: int):
     top = np.argsort(-(p + 1e-9 * rng.random(N)), kind="stable")[:M]
     S = np.unique(np.sort(np.vstack([top[None], drawn]), axis=1), axis=0)
     v = subset_values(G, S, criterion)
-    order = np.argsort(v, kind="stable")[:starts]
+    order = ties.order(v)[:starts]
     best_S, best_v = S[order[0]], float(v[order[0]])
     for k in order:
         Sk, vk = _local_search(G, S[k], criterion)
-        if vk < best_v:
+        if ties.improves(vk, best_v):
             best_S, best_v = Sk, vk
     return np.sort(best_S), best_v
 

@@ -6,10 +6,11 @@ import hashlib
 import json
 import math
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from simulation.output import write_file
 
 
 def to_jsonable(obj: Any, strict: bool = True) -> Any:
@@ -40,11 +41,4 @@ def write_json_atomic(path: str | os.PathLike, obj, strict: bool = True) -> None
     a half-written file. ``strict``: non-finite numbers become null (:func:`to_jsonable`);
     otherwise they are written as Python's ``Infinity``/``NaN`` and read back unchanged
     (checkpoints)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)  # as checks.output_path allowed
-    tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "w") as fh:
-        json.dump(to_jsonable(obj) if strict else obj, fh)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    write_file(path, json.dumps(to_jsonable(obj) if strict else obj))

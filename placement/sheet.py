@@ -25,6 +25,7 @@ printable sheet (:mod:`placement.sheet_html`) draws the same numbers.
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +37,7 @@ from placement.surfaces import mounting_surfaces, surface_index
 from simulation import checks
 from simulation.directivity import aim_vectors
 from simulation.mounting import face_obstacles
+from simulation.output import write_file, write_files
 from simulation.room import Room, as_room
 
 #: the CSV's columns, in order
@@ -200,15 +202,20 @@ def mounts(room: Room, anchors, tolerance: float | None = None) -> list[Mount]:
     return out
 
 
+def csv_text(rows: list[Mount]) -> str:
+    """The mounts as the text of ``anchors.csv`` (columns :data:`COLUMNS`)."""
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=COLUMNS)
+    w.writeheader()
+    for r in rows:
+        w.writerow(r.row())
+    return buf.getvalue()
+
+
 def write_csv(path, rows: list[Mount]) -> Path:
-    """Write the mounts as ``anchors.csv`` (columns :data:`COLUMNS`) to ``path``."""
-    path = Path(path)
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=COLUMNS)
-        w.writeheader()
-        for r in rows:
-            w.writerow(r.row())
-    return path
+    """Write the mounts as ``anchors.csv`` (columns :data:`COLUMNS`) to ``path`` (never
+    half-written, :mod:`simulation.output`)."""
+    return write_file(path, csv_text(rows))
 
 
 def anchors_from_csv(path, room: Room) -> np.ndarray:
@@ -243,8 +250,6 @@ def write_sheet(out_dir, room: Room, anchors, *, tolerance: float | None = None,
     rows = mounts(room, anchors, tolerance)
     out = checks.output_path("out_dir", out_dir, kind="dir")
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"csv": write_csv(out / "anchors.csv", rows)}
     html = render(room, rows, vertical_frames(room), title=title or f"Mounting sheet: {room.name}")
-    (out / "sheet.html").write_text(html)
-    paths["html"] = out / "sheet.html"
-    return paths
+    write_files({out / "anchors.csv": csv_text(rows), out / "sheet.html": html})
+    return {"csv": out / "anchors.csv", "html": out / "sheet.html"}

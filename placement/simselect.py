@@ -37,6 +37,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from placement import ties
 from placement.rangetable import (
     MAX_TABLE_DRAWS,
     RangeTable,
@@ -101,8 +102,8 @@ def descend(S, f: float, nbr: np.ndarray, score: _Scorer, rng: np.random.Generat
             continue
         swaps = [np.where(np.arange(M) == a, j, S) for j in js]
         g = score(swaps)
-        b = int(np.argmin(g))
-        if g[b] < f:
+        b = ties.argmin(g)
+        if ties.improves(g[b], f):
             S, f, stale = swaps[b], float(g[b]), 1
         else:
             stale += 1
@@ -144,7 +145,7 @@ class Chain:
         N = len(table.candidates)
         layouts = [rng.choice(N, M, replace=False) for _ in range(tries)]
         costs = table_costs(table, np.stack(layouts), statistic)
-        k = int(np.argmin(costs))
+        k = ties.argmin(costs)
         S = np.asarray(layouts[k])
         chain = cls(S, float(costs[k]), S.copy(), float(costs[k]), rng, rng.permutation(M))
         chain.nfev = tries
@@ -168,10 +169,10 @@ class Chain:
             swaps = np.stack([np.where(np.arange(M) == a, j, self.S) for j in js])
             g = table_costs(table, swaps, statistic)
             self.nfev += len(swaps)
-            b = int(np.argmin(g))
-            if g[b] < self.f:
+            b = ties.argmin(g)
+            if ties.improves(g[b], self.f):
                 self.S, self.f, self.fails = swaps[b], float(g[b]), 0
-                if self.f < self.fbest:
+                if ties.improves(self.f, self.fbest):
                     self.best, self.fbest = self.S.copy(), self.f
             else:
                 self.fails += 1
@@ -380,7 +381,8 @@ def _split(items: list, parts: int) -> list[list]:
 
 def _distinct(found) -> list[tuple[np.ndarray, float]]:
     out: list[tuple[np.ndarray, float]] = []
-    for S, f, *_ in sorted(found, key=lambda t: t[1]):
+    for i in ties.order([t[1] for t in found]):  # found in chain order: near-ties stable
+        S, f = found[i][0], found[i][1]
         if math.isfinite(f) and not any(np.array_equal(S, T) for T, _ in out):
             out.append((S, float(f)))
     return out

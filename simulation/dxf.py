@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from simulation import checks
+from simulation.output import write_with
 
 #: the drawing units read and written, in metres per unit
 UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
@@ -186,9 +187,7 @@ def write_plan(path, room, anchors, *, unit: str = "m", surfaces=None) -> Path:
             "ANCHOR", (p[0] / scale, p[1] / scale), dxfattribs={"layer": "anchors"}
         )
         ref.add_auto_attribs({"ID": str(j + 1), "Z": f"{p[2]:.4f}", "SURFACE": s})
-    out = Path(str(path))
-    doc.saveas(out)
-    return out
+    return write_with(Path(str(path)), doc.saveas)
 
 
 def read_anchors(path, unit: str = "m") -> np.ndarray:

@@ -322,10 +322,21 @@ def _literal_noise_gain(chirp: Chirp, rx: Receiver) -> np.ndarray:
 
 
 PRECISIONS = ("float64", "float32")
-#: the simulator's default DSP precision: float32 picks the float64 correlation index for
-#: all but a few windows in 10⁴ (docs/model.md, "The receiver chain"); "float64" stays
-#: selectable
+#: the simulator's default DSP precision: float32 computes in single precision and redoes
+#: in double the windows whose pick its rounding could change, so that it picks the float64
+#: chain's index (docs/model.md, "The receiver chain"); "float64" stays selectable
 DEFAULT_PRECISION = "float32"
+#: a single-precision decision (a comparison of two values of a curve, or of one with a
+#: threshold) is trusted when the values differ by more than this share of the curve's
+#: largest value, for the low-passed curve and for the raw one: single precision moves the
+#: low-passed curve by at most 4e-7 of its largest value and the raw one by at most 1.3e-6,
+#: on clean, noisy, weak and noise-only windows of either form (docs/model.md, "The
+#: receiver chain"), so another CPU's rounding (another BLAS kernel, another FFT) stays
+#: well inside the margins
+SINGLE_MARGIN_LOWPASSED, SINGLE_MARGIN_RAW = 4e-6, 1e-5
+#: lags on each side of the low-passed curve's top searched for the lags within the margin
+#: of it (a run reaching further is redone in double precision)
+NEAR_TOP = 64
 
 #: size of the correlation buffer of one part (bytes): a part's correlation is one matrix
 #: product (see Dsp.indices)
@@ -340,10 +351,13 @@ class Dsp:
 
     ``precision="float64"`` (this class's default) gives the index of
     :func:`reference_chain`. ``"float32"`` (the simulator's default,
-    :data:`DEFAULT_PRECISION`) runs the correlation and low-pass in single precision;
-    rounding then moves the low-pass argmax of a few windows in 10⁴ onto a neighbouring
-    raw peak (docs/model.md, "The receiver chain"). ``form`` is ``"matrix"`` or ``"fft"``
-    (module docstring; default: by the window's length, :data:`FFT_MIN_WINDOW`).
+    :data:`DEFAULT_PRECISION`) runs the correlation and low-pass in single precision and
+    checks every decision of the pick (the argmax, the snap's comparisons, the first-path
+    floor and noise test, the detection threshold) against :data:`SINGLE_MARGIN`; a window
+    with a decision closer than that is redone in double precision. It gives the float64
+    index, and the same index on any CPU (docs/model.md, "The receiver chain"). ``form`` is
+    ``"matrix"`` or ``"fft"`` (module docstring; default: by the window's length,
+    :data:`FFT_MIN_WINDOW`).
     """
 
     def __init__(
@@ -507,10 +521,12 @@ class Dsp:
         spec *= self.lowpass_response
         return scipy.fft.irfft(spec, n=self.nfft, axis=-1)[:, : self.n_corr]
 
-    def _block_picks(self, buf: np.ndarray, sigma=None) -> tuple[np.ndarray, np.ndarray]:
-        """Snapped indices (B,) and the raw peaks |c[k]| there (B,) of rows (B, nfft)
-        holding c at lags 0 … Nc − 1, zeros after (c is replaced by |c| in place);
-        ``sigma`` (B,) the windows' noise σ for the first-path pick's noise test."""
+    def _block_picks(self, buf: np.ndarray, sigma=None):
+        """Snapped indices (B,), the raw peaks |c[k]| there (B,) and whether a decision was
+        too close to call in this DSP's precision (B,) bool (always False in double) of rows
+        (B, nfft) holding c at lags 0 … Nc − 1, zeros after (c is replaced by |c| in place);
+        ``sigma`` (B,) the windows' noise σ for the first-path pick's noise test and the
+        detection threshold."""
         curve = buf[:, : self.n_corr]
         np.abs(curve, out=curve)
         spec = scipy.fft.rfft(buf, axis=-1, workers=1)
@@ -518,29 +534,47 @@ class Dsp:
         lp = scipy.fft.irfft(spec, n=self.nfft, axis=-1, workers=1)
         lp[:, self.n_corr :] = -np.inf  # outside the correlation; argmax on whole rows is faster
         k = np.argmax(lp, axis=-1)
+        lp = lp[:, : self.n_corr]
+        verify = self.dtype == np.float32
+        margin = _Margins(lp[np.arange(len(k)), k], curve) if verify else None
+        w = self.snap_width
+        unsure = margin.runner_up(lp, k, curve, w) if verify else np.zeros(len(k), dtype=bool)
         if self.receiver.pick == "first-path":
-            k = self._first_path(lp[:, : self.n_corr], k, sigma)
+            k = self._first_path(lp, k, sigma, margin, unsure, curve)
         k = snap_to_peak(curve, k, self.snap_width)
-        return k, curve[np.arange(len(k)), k].astype(float)
+        peak = curve[np.arange(len(k)), k].astype(float)
+        if verify and self.threshold and sigma is not None:
+            level = self.threshold * np.asarray(sigma) * self.noise_gain[k]
+            unsure |= np.abs(peak - level) <= margin.curve
+        return k, peak, unsure
 
-    def _first_path(self, lp: np.ndarray, k_max: np.ndarray, sigma) -> np.ndarray:
+    def _first_path(self, lp, k_max, sigma, margin=None, unsure=None, curve=None):
         """(B,) the first-path pick on low-passed curves lp (B, Nc) (module docstring, step
         4): the argmax within the qualifying run of lags with the largest lags, else
-        ``k_max``."""
+        ``k_max``. With ``margin`` (:class:`_Margins`), rows whose floor or noise test a
+        rounding could decide otherwise are marked in ``unsure`` (B,) in place."""
         rx = self.receiver
         rows = np.arange(len(lp))
         tau_top = (rx.wake_sample - (k_max + 1.0 - rx.window)) / rx.fs
-        ok = lp >= (first_path_floor(self.chirp, rx, tau_top) * lp[rows, k_max])[:, None]
+        floor = first_path_floor(self.chirp, rx, tau_top) * lp[rows, k_max]
+        ok = lp >= floor[:, None]
         n = lp.shape[1]
         end = n - 1 - np.argmax(ok[:, ::-1], axis=1)  # the run's latest lag: earliest path
         lags = np.arange(n)
         gap = ~ok & (lags[None, :] < end[:, None])  # lags below the run that do not qualify
         start = np.where(gap.any(axis=1), n - np.argmax(gap[:, ::-1], axis=1), 0)
         run = (lags[None, :] >= start[:, None]) & (lags[None, :] <= end[:, None])
-        k = np.argmax(np.where(run, lp, -np.inf), axis=1)
+        in_run = np.where(run, lp, -np.inf)
+        k = np.argmax(in_run, axis=1)
+        if margin is not None:
+            unsure |= margin.crosses(lp, floor)
+            unsure |= margin.runner_up(in_run, k, curve, self.snap_width)
         if sigma is not None and rx.first_path_noise > 0:  # a lobe of noise: the strongest
             noise = rx.first_path_noise * np.asarray(sigma) * math.sqrt(2 / math.pi)
-            k = np.where(lp[rows, k] >= noise * self.noise_gain[k], k, k_max)
+            level = noise * self.noise_gain[k]
+            if margin is not None:
+                unsure |= np.abs(lp[rows, k] - level) <= margin.lowpassed
+            k = np.where(lp[rows, k] >= level, k, k_max)
         return k
 
     def indices(self, windows: np.ndarray, block: int = 128) -> np.ndarray:
@@ -559,7 +593,8 @@ class Dsp:
         reused from part to part (few large products: each wakes the BLAS threads), its
         FFTs run in blocks of ``block`` rows on ``scipy.fft``'s worker count of threads
         (``with scipy.fft.set_workers(n): ...``; numpy and scipy.fft release the GIL).
-        Results depend neither on ``block`` nor on the threads.
+        Results depend neither on ``block`` nor on the threads. In single precision, the
+        windows with a decision too close to call are redone in double (class docstring).
         """
         if int(block) != block or block < 1:
             raise ValueError(f"block: must be an integer >= 1, got {block}")
@@ -574,11 +609,12 @@ class Dsp:
         sig = None
         if sigma is not None:
             sig = np.broadcast_to(np.asarray(sigma, dtype=float), lead).reshape(-1)
-            if self.receiver.pick == "first-path":
+            if self.receiver.pick == "first-path" or self.threshold:
                 self.noise_gain  # noqa: B018 - computed once here, not in every thread
         step = block * max(1, PART_BYTES // (self.nfft * self.dtype.itemsize * block))
         out = np.empty(n, dtype=np.int64)
         peak = np.empty(n)
+        unsure = np.zeros(n, dtype=bool)
         buf = np.zeros((min(step, n), self.nfft), dtype=self.dtype)
         threads = min(scipy.fft.get_workers(), -(-min(step, n) // block))
         pool = None
@@ -601,12 +637,19 @@ class Dsp:
                 results = list(map(task, args) if pool is None else pool.map(task, args))
                 out[s : s + part.shape[0]] = np.concatenate([r[0] for r in results])
                 peak[s : s + part.shape[0]] = np.concatenate([r[1] for r in results])
+                unsure[s : s + part.shape[0]] = np.concatenate([r[2] for r in results])
         finally:
             if pool is not None:
                 pool.shutdown()
+        redo = np.flatnonzero(unsure)
+        if redo.size:
+            exact = dsp_for(self.chirp, self.receiver, "float64", self.form)
+            out[redo], peak[redo] = exact.picks(
+                flat[redo], block, None if sig is None else sig[redo]
+            )
         return out.reshape(lead), peak.reshape(lead)
 
-    def _picks_of(self, arg) -> tuple[np.ndarray, np.ndarray]:
+    def _picks_of(self, arg):
         rows, b, block, sig = arg
         return self._block_picks(rows[b : b + block], sig)
 
@@ -641,7 +684,7 @@ class Dsp:
         too."""
         lead = np.shape(windows)[:-1]
         sigma = np.broadcast_to(np.asarray(noise_sigma, dtype=float), lead)
-        k, peak = self.picks(windows, sigma=sigma if self.receiver.pick != "paper" else None)
+        k, peak = self.picks(windows, sigma=sigma)
         r = self.receiver.range_from_index(k, speed_of_sound)
         heard = peak > self.threshold * sigma * self.noise_gain[k] if self.threshold else peak > 0
         lo, hi = delays
@@ -656,6 +699,60 @@ class Dsp:
         status = np.where(seen, np.where(heard, HEARD, NOT_HEARD), OUT_OF_REACH)
         status = status.astype(np.int8)
         return np.where(status == HEARD, r, np.nan), status
+
+
+class _Margins:
+    """The margins (B,) within which a single-precision decision on a row of the low-passed
+    curve ``lowpassed`` or of the raw curve ``curve`` (B, Nc) is too close to call:
+    :data:`SINGLE_MARGIN_LOWPASSED` and :data:`SINGLE_MARGIN_RAW` times the row's largest
+    value (``top`` (B,) of the low-passed curve)."""
+
+    def __init__(self, top: np.ndarray, curve: np.ndarray):
+        self.lowpassed = SINGLE_MARGIN_LOWPASSED * top.astype(float)
+        self.curve = SINGLE_MARGIN_RAW * curve.max(axis=1).astype(float)
+
+    def runner_up(self, values: np.ndarray, k: np.ndarray, curve: np.ndarray, width: int):
+        """(B,) the argmax k of each row of ``values`` (low-passed) could snap elsewhere:
+        the lags within the margin of its value are not one run within :data:`NEAR_TOP` of
+        k, or the run's ends snap to different raw peaks of ``curve`` (between them every
+        lag snaps to the same peak)."""
+        rows = np.arange(len(k))[:, None]
+        n = values.shape[1]
+        local = np.clip(k[:, None] + np.arange(-NEAR_TOP, NEAR_TOP + 1), 0, n - 1)
+        near_values = values[rows, local]
+        values[rows, local] = -np.inf
+        far = values.max(axis=1)
+        values[rows, local] = near_values
+        floor = (values[rows[:, 0], k].astype(float) - self.lowpassed)[:, None]
+        near = near_values >= floor
+        first = np.argmax(near, axis=1)
+        last = near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)
+        unsure = (far >= floor[:, 0]) | (near.sum(axis=1) != last - first + 1)
+        unsure |= (first == 0) | (last == near.shape[1] - 1)  # the run may reach further
+        first, last = local[rows[:, 0], first], local[rows[:, 0], last]
+        apart = snap_to_peak(curve, first, width) != snap_to_peak(curve, last, width)
+        return unsure | apart | self.snap(curve, first, last, width)
+
+    def crosses(self, values: np.ndarray, level: np.ndarray) -> np.ndarray:
+        """(B,) a lag of ``values`` (B, Nc) lies within the margin of the row's ``level``."""
+        near = np.abs(values - level[:, None].astype(values.dtype))
+        return np.any(near <= self.lowpassed[:, None], axis=1)
+
+    def snap(self, curve: np.ndarray, first: np.ndarray, last: np.ndarray, width: int):
+        """(B,) a local maximum of the raw curve from ``first`` − ``width`` to ``last`` +
+        ``width`` (:func:`snap_to_peak`) could move: two neighbouring samples there differ by
+        less than the margin and neither falls off towards its other side by more."""
+        n = curve.shape[1]
+        span = int(np.max(last - first)) if len(first) else 0
+        idx = first[:, None] + np.arange(-width - 2, span + width + 3)
+        inside = idx[:, 1:-2] <= (last + width + 1)[:, None]
+        v = curve[np.arange(len(first))[:, None], np.clip(idx, 0, n - 1)].astype(float)
+        m = self.curve[:, None]
+        d = np.diff(v, axis=1)  # d[i] = v[i + 1] − v[i]
+        # the pair (i + 1, i + 2) is level, the sample before it rises into it and the one
+        # after it falls from it (each to within the margin): a top the snap may take
+        flat_top = (np.abs(d[:, 1:-1]) <= m) & (d[:, :-2] >= -m) & (d[:, 2:] <= m)
+        return np.any(flat_top & inside, axis=1)
 
 
 FORMS = ("matrix", "fft")

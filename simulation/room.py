@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from simulation import air, checks, floorplan
+from simulation.output import write_file
 from simulation.regions import in_boxes
 from simulation.signal import Signal, as_signal
 
@@ -461,7 +462,7 @@ class Room:
         for key, items in tables.items():
             for item in items:
                 lines += ["", f"[[{key}]]"] + [f"{k} = {_toml_value(v)}" for k, v in item.items()]
-        Path(path).write_text("\n".join(lines) + "\n")
+        write_file(path, "\n".join(lines) + "\n")
 
     # -- derived quantities --------------------------------------------------------------
     @property

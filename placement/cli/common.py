@@ -10,6 +10,7 @@ import numpy as np
 
 from placement.serialization import to_jsonable
 from simulation import checks
+from simulation.output import write_file
 from simulation.room import Room
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "apply_signal",
     "describe_room",
     "describe_signal",
+    "json_text",
     "load_layout",
     "load_room",
     "output_dir",
@@ -243,12 +245,15 @@ def output_file(name: str, path, suffixes=None) -> Path:
     return checks.output_path(name, path, kind="file", suffixes=suffixes)
 
 
+def json_text(obj: Any) -> str:
+    """``obj`` as indented strict JSON text."""
+    return json.dumps(to_jsonable(obj), indent=2) + "\n"
+
+
 def write_json(path: str | Path, obj: Any) -> Path:
-    """Write ``obj`` as indented strict JSON, creating parent folders."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(to_jsonable(obj), indent=2) + "\n")
-    return path
+    """Write ``obj`` as indented strict JSON, creating parent folders; never half-written
+    (:mod:`simulation.output`)."""
+    return write_file(path, json_text(obj))
 
 
 def load_plan(result_dir):

@@ -15,14 +15,15 @@ from placement.cli.common import (
     availability_note,
     describe_room,
     describe_signal,
+    json_text,
     load_room,
     number,
     output_dir,
-    write_json,
 )
 from placement.costs import COST_NAMES
 from placement.workers import available_cores
 from simulation import checks
+from simulation.output import write_files
 
 #: seconds to wait for a Dask scheduler before giving up
 SCHEDULER_TIMEOUT = 3
@@ -257,9 +258,8 @@ def run(args) -> int:
         res = seed_then_pso(room, args.anchors, cost=args.cost, **opts, executor=executor,
                             rng=args.seed, progress=not args.no_progress,
                             checkpoint=args.checkpoint)  # fmt: skip
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "result.json").write_text(res.to_json(indent=1) + "\n")
-    write_json(out / "layout.json", {"anchors": res.anchors})
+    write_files({out / "result.json": res.to_json(indent=1) + "\n",
+                 out / "layout.json": json_text({"anchors": res.anchors})})  # fmt: skip
     _print_result(res, args)
     print(
         f"wrote {out / 'result.json'} and {out / 'layout.json'} ({time.perf_counter() - t0:.1f} s)"

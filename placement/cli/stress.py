@@ -7,6 +7,7 @@ import time
 
 from placement.cli.common import load_plan, output_file
 from simulation import checks
+from simulation.output import write_file
 
 
 def register(sub) -> None:
@@ -40,7 +41,7 @@ def run(args) -> int:
     t0 = time.perf_counter()
     res = stress(room, anchors, realizations=args.realizations, draws=args.draws, rng=args.seed)
     _print(res)
-    out.write_text(json.dumps(res.to_dict(), indent=1) + "\n")
+    write_file(out, json.dumps(res.to_dict(), indent=1) + "\n")
     print(f"wrote {out} ({time.perf_counter() - t0:.0f} s)")
     return 0
 

@@ -13,6 +13,7 @@ from placement.cli.common import (
     add_signal_arguments,
     apply_signal,
     describe_signal,
+    json_text,
     load_room,
     number,
     output_dir,
@@ -20,6 +21,7 @@ from placement.cli.common import (
 )
 from placement.cli.plan import _executor
 from simulation import checks
+from simulation.output import write_files
 
 
 def register(sub) -> None:
@@ -142,7 +144,7 @@ def run(args) -> int:
 
 def _run_one(args, room, out):
     """One sweep of M for one room (and its signal design) into ``out``; its result."""
-    from analysis.figures import save, sweep_curves
+    from analysis.figures import png_bytes, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
     from placement.effort import effort_options
@@ -183,12 +185,12 @@ def _run_one(args, room, out):
             progress=not args.no_progress,
             on_row=report,
         )
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "sweep.json").write_text(res.to_json(indent=1) + "\n")
     rows = [r.to_dict() for r in res.rows]
     paper = TABLE1 if room.name == "techtile" else None
-    save(sweep_curves(rows, res.target_p95, paper), out / "sweep.png")
-    write_json(out / "layouts.json", {str(r.M): r.anchors for r in res.rows})
+    curves = png_bytes(sweep_curves(rows, res.target_p95, paper))
+    write_files({out / "sweep.json": res.to_json(indent=1) + "\n",
+                 out / "layouts.json": json_text({str(r.M): r.anchors for r in res.rows}),
+                 out / "sweep.png": curves})  # fmt: skip
     _print_table(res, paper)
     print(f"wrote {out / 'sweep.json'} and {out / 'sweep.png'} ({time.perf_counter() - t0:.0f} s)")
     return res

@@ -1,0 +1,7 @@
+"""``python -m placement.cli``: the ``anchorplan`` command."""
+
+import sys
+
+from placement.cli import main
+
+sys.exit(main())
