@@ -24,45 +24,50 @@ from simulation import checks
 from simulation.noise import DEFAULT_SNR_DB
 from simulation.positioning import MIN_HEARD
 from simulation.room import Room, as_room
+from simulation.system import as_system
 
 
-def heard(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> np.ndarray:
-    """(..., P, M) bool: node p hears anchor j (module docstring); anchors (..., M, 3),
-    nodes (P, 3) in metres."""
+def heard(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB, system=None) -> np.ndarray:
+    """(..., P, M) bool: node p hears anchor j with ``system``'s signal and receiver
+    (module docstring; default the paper's); anchors (..., M, 3), nodes (P, 3) in metres."""
     room = as_room(room)
     a = checks.reals("anchors", anchors)
     if a.ndim < 2 or a.shape[-1] != 3:
         raise ValueError(f"anchors: expected shape (..., M, 3), got {a.shape}")
     p = checks.points("nodes", nodes)
-    return PhysicalRangeNoise(room, snr_db=snr_db).heard(a, p)
+    return PhysicalRangeNoise(room, snr_db=snr_db, system=as_system(system)).heard(a, p)
 
 
-def coverage(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> np.ndarray:
+def coverage(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB, system=None):
     """(..., P) the number of anchors each node hears (:func:`heard`)."""
-    return np.sum(heard(room, anchors, nodes, snr_db), axis=-1)
+    return np.sum(heard(room, anchors, nodes, snr_db, system), axis=-1)
 
 
-def covered_share(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB) -> float:
+def covered_share(room: Room, anchors, nodes, snr_db: float = DEFAULT_SNR_DB, system=None):
     """The share of the nodes that hear at least 4 anchors (:data:`MIN_HEARD`)."""
-    return float(np.mean(coverage(room, anchors, nodes, snr_db) >= MIN_HEARD))
+    return float(np.mean(coverage(room, anchors, nodes, snr_db, system) >= MIN_HEARD))
 
 
-def heard_sigma(room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB):
+def heard_sigma(
+    room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB, system=None
+):
     """(..., P, M) the range σ (m; a scalar or anything broadcasting to (..., P, M)) where
     node p hears anchor j, +inf (no information, :func:`analysis.fim.fim`) where it does
     not: the bound then counts only the anchors the receiver reports."""
-    h = heard(room, anchors, nodes, snr_db)
+    h = heard(room, anchors, nodes, snr_db, system)
     s = np.broadcast_to(np.asarray(sigma, dtype=float), h.shape)
     return np.where(h, s, np.inf)
 
 
-def bound(room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB):
+def bound(
+    room: Room, anchors, nodes, sigma=DEFAULT_SIGMA, snr_db: float = DEFAULT_SNR_DB, system=None
+):
     """(..., P) PEB = √tr J⁻¹ (m) from the anchors each node hears (:func:`heard_sigma`),
     +inf at a node that hears fewer than 4 (no fix) or whose heard anchors leave J
     singular: the bound the report and the PEB maps show."""
     from analysis.fim import peb
 
-    s = heard_sigma(room, anchors, nodes, sigma, snr_db)
+    s = heard_sigma(room, anchors, nodes, sigma, snr_db, system)
     out = peb(anchors, nodes, sigma=s)
     return np.where(np.sum(np.isfinite(s), axis=-1) >= MIN_HEARD, out, np.inf)
 

@@ -47,6 +47,7 @@ from simulation.directivity import aim_vectors
 from simulation.mounting import mounting_surfaces as _mounting_surfaces
 from simulation.output import write_with
 from simulation.room import SURFACES, Room, as_room
+from simulation.system import as_system
 
 #: colour-blind-friendly qualitative palette (Okabe–Ito without black, plus extras)
 PALETTE: tuple[str, ...] = (
@@ -320,8 +321,10 @@ def peb_plane(
     value: float,
     sigma=DEFAULT_SIGMA,
     resolution: float = 0.05,
+    system=None,
 ):
-    """PEB (m) on the plane ``axis = value`` across the whole room.
+    """PEB (m) on the plane ``axis = value`` across the whole room, for the anchors each
+    point hears with ``system`` (default the paper's).
 
     Returns ``(u, v, values)``: cell-centre coordinates u (nu,), v (nv,) along the two
     other axes in increasing order and PEB values (nu, nv) in metres, +inf where the FIM
@@ -351,7 +354,7 @@ def peb_plane(
     pts[..., iu] = u[:, None]
     pts[..., iv] = v[None, :]
     flat = pts.reshape(-1, 3)
-    vals = _bound(room, anchors, flat, sigma)
+    vals = _bound(room, anchors, flat, sigma, system=system)
     if not room.is_shoebox or room.obstacles:
         vals = np.where(room.contains(flat), vals, np.nan)
     return u, v, vals.reshape(nu, nv)
@@ -373,8 +376,10 @@ def peb_map(
     ncols: int | None = None,
     figsize=None,
     dpi: float = 100,
+    system=None,
 ) -> Figure:
-    """PEB heat maps (m) on horizontal slices and vertical cuts, anchors marked (Figs. 1, 2, 6).
+    """PEB heat maps (m) on horizontal slices and vertical cuts, anchors marked (Figs. 1, 2, 6);
+    the anchors each point hears with ``system`` (default the paper's) count.
 
     One panel per height z (x–y plane), per ``x_cuts`` value (y–z plane) and per ``y_cuts``
     value (x–z plane); default heights: the room's mid height. All panels share one colour
@@ -391,7 +396,7 @@ def peb_map(
     planes += [(0, float(x)) for x in x_cuts] + [(1, float(y)) for y in y_cuts]
     if not planes:
         raise ValueError("heights/x_cuts/y_cuts: at least one plane is required")
-    maps = [peb_plane(room, anchors, k, c, sigma, resolution) for k, c in planes]
+    maps = [peb_plane(room, anchors, k, c, sigma, resolution, system) for k, c in planes]
     allvals = np.concatenate([m[2].ravel() for m in maps])
     allvals = allvals[~np.isnan(allvals)]  # outside the room
     norm, extend = _norm(allvals, scale, vmax=vmax)
@@ -451,8 +456,10 @@ def coverage_map(
     resolution: float = 0.1,
     anchor_color: str = ANCHOR_COLOR,
     dpi: float = 100,
+    system=None,
 ) -> Figure:
-    """Coverage: the number of anchors heard (:func:`analysis.coverage.coverage`) on
+    """Coverage: the number of anchors heard with ``system`` (default the paper's;
+    :func:`analysis.coverage.coverage`) on
     horizontal slices at ``heights`` (default: the room's mid height), one discrete colour
     per count; red hatching where fewer than 4 are heard (no position fix); anchors
     numbered as the rows of ``anchors`` (M, 3), keep-outs and tag zones as in
@@ -484,7 +491,7 @@ def coverage_map(
     short = 0.0
     for ax, z in zip(axs, heights, strict=False):
         pts = np.stack(np.meshgrid(u, v, [z], indexing="ij"), axis=-1).reshape(-1, 3)
-        count = _coverage(room, anchors, pts).reshape(nu, nv)
+        count = _coverage(room, anchors, pts, system=system).reshape(nu, nv)
         inside = room.contains(pts).reshape(nu, nv)
         short = max(short, float(np.mean(count[inside] < 4)) if inside.any() else 0.0)
         extent = (0.0, L[0], 0.0, L[1])
@@ -509,7 +516,8 @@ def coverage_map(
     cb = fig.colorbar(im, ax=list(axs[:n]), shrink=0.9, ticks=range(M + 1))
     cb.set_label("anchors heard")
     note = f"; hatched: < 4 heard (≤ {100 * short:.1f} % of a slice)" if short else ""
-    fig.suptitle(f"Anchors heard, M = {M}, reach {room.reach:.2f} m{note}", fontsize=10)
+    reach = as_system(system).reach(room.speed_of_sound)
+    fig.suptitle(f"Anchors heard, M = {M}, reach {reach:.2f} m{note}", fontsize=10)
     return fig
 
 

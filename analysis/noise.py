@@ -20,8 +20,10 @@ import numpy as np
 from analysis.fim import DEFAULT_SIGMA, check_sigma
 from simulation import checks
 from simulation.directivity import aim_vectors, cardioid
+from simulation.multipath import REFERENCE_FREQUENCY
 from simulation.noise import check_snr
 from simulation.room import Room, as_room
+from simulation.system import System, as_system
 
 #: accepted constant range σ (m)
 
@@ -41,11 +43,14 @@ class ConstantRangeNoise:
         return np.asarray(self.value)
 
 
-def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
+def direct_amplitude(
+    room: Room, anchors, positions, frequency: float = REFERENCE_FREQUENCY
+) -> np.ndarray:
     """Direct-path amplitude A_j(p), (..., P, M), for a unit-amplitude chirp at the speaker.
 
     A = g(θ)·exp(−a·d/2)/(4π d): cardioid gain toward p (anchor aimed at the centroid),
-    air absorption and spherical spreading (docs/model.md). A node on an anchor gets +inf.
+    air absorption at ``frequency`` (Hz, the chirp's centre) and spherical spreading
+    (docs/model.md). A node on an anchor gets +inf.
     """
     room = as_room(room)
     a = checks.reals("anchors", anchors)
@@ -57,7 +62,8 @@ def direct_amplitude(room: Room, anchors, positions) -> np.ndarray:
     aim = aim_vectors(a, room.centroid)[..., None, :, :]  # (..., 1, M, 3)
     with np.errstate(divide="ignore", invalid="ignore"):
         cos = np.where(d > 0, np.sum(diff * aim, axis=-1) / np.where(d > 0, d, 1.0), 1.0)
-        amp = cardioid(cos) * np.exp(-0.5 * room.air_reference * d) / (4 * np.pi * d)
+        air = float(room.air_coefficient(frequency))
+        amp = cardioid(cos) * np.exp(-0.5 * air * d) / (4 * np.pi * d)
     return np.where(d > 0, amp, np.inf)
 
 
@@ -93,25 +99,24 @@ class PhysicalRangeNoise:
     room: Room = field(default_factory=Room.techtile)
     snr_db: float = 30.0
     grid_shape: tuple[int, int, int] = (9, 6, 5)
+    system: System = field(default_factory=System)
 
     def __post_init__(self) -> None:
         if not isinstance(self.room, Room):
             raise ValueError(f"room: must be a simulation.Room, got {checks.describe(self.room)}")
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
         object.__setattr__(self, "grid_shape", checks.grid_shape("grid_shape", self.grid_shape))
-
-    @property
-    def signal(self):
-        """The room's chirp and receiver (:class:`simulation.Signal`)."""
-        return self.room.signal
+        object.__setattr__(self, "system", as_system(self.system))
 
     @property
     def chirp(self):
-        return self.room.signal.chirp
+        """The system's chirp."""
+        return self.system.chirp
 
     @property
     def receiver(self):
-        return self.room.signal.receiver
+        """The system's receiver."""
+        return self.system.receiver
 
     def reference_amplitude(self, anchors) -> np.ndarray:
         """A_j at the grid node closest to each anchor, (..., M)."""
@@ -119,7 +124,7 @@ class PhysicalRangeNoise:
         grid = self.room.grid(self.grid_shape)  # the room grid, not the tag zones (SNR rule)
         d = np.linalg.norm(grid[:, None, :] - a[..., None, :, :], axis=-1)  # (..., G, M)
         closest = np.argmin(d, axis=-2)  # (..., M)
-        amp = direct_amplitude(self.room, a, grid)  # (..., G, M)
+        amp = direct_amplitude(self.room, a, grid, self.chirp.centre)  # (..., G, M)
         return np.take_along_axis(amp, closest[..., None, :], axis=-2)[..., 0, :]
 
     def _sum_f2(self, tau: np.ndarray) -> np.ndarray:
@@ -154,7 +159,7 @@ class PhysicalRangeNoise:
         p = np.asarray(positions, dtype=float)
         d = np.linalg.norm(p[:, None, :] - a[..., None, :, :], axis=-1)
         c = self.room.speed_of_sound
-        lo, hi = self.signal.delays
+        lo, hi = self.system.delays
         out = (d / c >= lo) & (d / c <= hi) & line_of_sight(self.room, a, p)
         rx = self.receiver
         if rx.false_alarm is not None:
@@ -165,7 +170,7 @@ class PhysicalRangeNoise:
             gain = dsp.noise_gain[k]
             noise = self.reference_amplitude(a)[..., None, :] / np.sqrt(2.0)
             noise = noise / np.sqrt(10.0 ** (self.snr_db / 10.0))  # σ_w of the SNR rule
-            amp = direct_amplitude(self.room, a, p)
+            amp = direct_amplitude(self.room, a, p, self.chirp.centre)
             out &= amp * gain > dsp.threshold * noise
         return out
 
@@ -181,7 +186,7 @@ class PhysicalRangeNoise:
         self.room.check_nodes(p)
         c = self.room.speed_of_sound
         d = np.linalg.norm(p[:, None, :] - a[..., None, :, :], axis=-1)
-        amp = direct_amplitude(self.room, a, p)
+        amp = direct_amplitude(self.room, a, p, self.chirp.centre)
         ref = self.reference_amplitude(a)[..., None, :]
         f2 = self._sum_f2(d / c)
         snr = 10.0 ** (self.snr_db / 10.0)
@@ -310,6 +315,7 @@ class MultipathRangeNoise:
     room: Room = field(default_factory=Room.techtile)
     floor: float = 0.04
     snr_db: float = 30.0
+    system: System = field(default_factory=System)
 
     def __post_init__(self) -> None:
         if not isinstance(self.room, Room):
@@ -317,6 +323,7 @@ class MultipathRangeNoise:
         floor = check_sigma(self.floor, "floor")
         object.__setattr__(self, "floor", floor)
         object.__setattr__(self, "snr_db", check_snr("snr_db", self.snr_db))
+        object.__setattr__(self, "system", as_system(self.system))
 
     def bias(self, anchors, positions) -> np.ndarray:
         """(P, M) noise-free simulated range minus true distance, metres."""
@@ -324,7 +331,7 @@ class MultipathRangeNoise:
 
         a = np.asarray(anchors, dtype=float)
         p = np.asarray(positions, dtype=float)
-        r = simulate_ranges(self.room, a, p, noise=False, snr_db=self.snr_db)
+        r = simulate_ranges(self.room, a, p, noise=False, snr_db=self.snr_db, system=self.system)
         return r - np.linalg.norm(p[:, None, :] - a[None, :, :], axis=-1)
 
     def sigma(self, anchors, positions) -> np.ndarray:

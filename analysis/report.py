@@ -53,10 +53,10 @@ from analysis.report_data import (
     load_results,
     room_of,
     sim_from_evaluation,
+    system_of,
 )
 from simulation import streams
 from simulation.output import write_file
-from simulation.positioning import KEEP_IN_ROOM
 
 logger = logging.getLogger(__name__)
 
@@ -95,9 +95,8 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
             ctx.notes.append(f"{e.name}: not simulated ({exc}).")
             continue
         t = time.perf_counter()
-        ev = evaluate(
-            ctx.room, e.anchors, realizations=R, rng=seed, nodes=ctx.nodes, bounded=KEEP_IN_ROOM
-        )  # as the plan's figures (docs/model.md)
+        ev = evaluate(ctx.room, e.anchors, realizations=R, rng=seed, nodes=ctx.nodes,
+                      system=ctx.system)  # the plan's system, as the plan's figures  # fmt: skip
         e.fresh = sim_from_evaluation(ev, f"simulated for this report (R = {R})")
         if e.sim is None:
             e.sim = e.fresh
@@ -168,7 +167,7 @@ def _context(result_dir, sigma, realizations: int, comparisons) -> Context:
 
     data = load_results(result_dir)
     evaluation = data["evaluation"]
-    room = room_of(data)
+    room, system = room_of(data), system_of(data)
     nodes = (
         json_array(evaluation["nodes"], "evaluation nodes", 2)
         if evaluation is not None and evaluation.get("nodes") is not None
@@ -181,11 +180,10 @@ def _context(result_dir, sigma, realizations: int, comparisons) -> Context:
         raise ValueError(f"sigma: must be > 0 m, got {sigma}")
     layouts = collect_layouts(data, room, nodes, comparisons)
     for e in layouts:
-        e.peb = bound(room, e.anchors, nodes, sigma)
+        e.peb = bound(room, e.anchors, nodes, sigma, system=system)
     colors = layout_colors([e.name for e in layouts])
-    return Context(
-        Path(result_dir), data, room, nodes, sigma, layouts, colors, [], [], realizations
-    )
+    return Context(Path(result_dir), data, room, nodes, sigma, layouts, colors, [], [],
+                   realizations, system=system)  # fmt: skip
 
 
 def _encode_figures(figures: list[Figure], figures_dir) -> None:

@@ -17,6 +17,7 @@ import numpy as np
 from simulation import checks
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse
+from simulation.system import System
 
 RESULT_FILE = "result.json"
 EVALUATION_FILE = "evaluation.json"
@@ -98,6 +99,7 @@ class Context:
     figures: list[Figure] = field(default_factory=list)
     realizations: int = 0
     elapsed: float = 0.0
+    system: System = field(default_factory=System)
 
     @property
     def result(self) -> dict | None:
@@ -148,9 +150,27 @@ def load_results(result_dir: str | Path) -> dict[str, dict | None]:
 
 
 def room_of(data: dict[str, dict | None]) -> Room:
-    """The room of a result folder's data (techtile when the files do not name one)."""
+    """The room of a result folder's data (techtile when the files do not name one; the
+    ``signal`` table of files written before the system was its own setting left out)."""
     main = data["result"] if data.get("result") is not None else data["evaluation"]
-    return Room.from_dict(main["room"]) if main.get("room") else Room.techtile()
+    if not main.get("room"):
+        return Room.techtile()
+    return Room.from_dict({k: v for k, v in main["room"].items() if k != "signal"})
+
+
+def system_of(data: dict[str, dict | None]) -> System:
+    """The system of a result folder's data: its ``system``; in files written before the
+    system was its own setting, the room's ``signal`` table with the paper's positioning;
+    else the paper's system."""
+    main = data["result"] if data.get("result") is not None else data["evaluation"]
+    if main.get("system"):
+        return System.from_dict(main["system"])
+    legacy = (main.get("room") or {}).get("signal") or {}
+    chirp = {k: v for k, v in legacy.items() if k in {"f0", "f1", "duration"}}
+    receiver = {k: v for k, v in legacy.items() if k not in chirp}
+    if not legacy:
+        return System()
+    return System.from_dict({"signal": chirp, "receiver": receiver})
 
 
 def main_anchors(data: dict[str, dict | None]) -> np.ndarray:

@@ -77,13 +77,14 @@ def _coverage(figs: _Figures) -> None:
     figs.add(
         f"Coverage of the {best.name} layout",
         "The number of anchors each point hears (within the signal's reach"
-        + (" and above the receiver's detection threshold" if ctx.room.signal.receiver.false_alarm
+        + (" and above the receiver's detection threshold" if ctx.system.receiver.false_alarm
            is not None else "")
-        + f", reach {ctx.room.reach:.2f} m) on horizontal slices at the node heights; a "
-        "position needs 4. Red hatching: fewer than 4 heard, no fix." + _regions_note(ctx),
+        + f", reach {ctx.system.reach(ctx.room.speed_of_sound):.2f} m) on horizontal slices "
+        "at the node heights; a position needs 4. Red hatching: fewer than 4 heard, no fix."
+        + _regions_note(ctx),
         lambda: F.coverage_map(
             ctx.room, best.anchors, heights=heights, anchor_color=ctx.colors[best.name],
-            dpi=figs.dpi,
+            dpi=figs.dpi, system=ctx.system,
         ),
         section="layout",
     )  # fmt: skip
@@ -108,6 +109,7 @@ def _peb(figs: _Figures) -> None:
             y_cuts=[room.size[1] / 2],
             anchor_color=ctx.colors[best.name],
             dpi=figs.dpi,
+            system=ctx.system,
         ),
     )
     shown = [e for e in ctx.layouts if e.role != "initial"]

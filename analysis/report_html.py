@@ -187,9 +187,10 @@ def _head(ctx: Context) -> list[str]:
         f"<h1>anchorplan report — {_e(room.name)}, M = {len(best.anchors)}</h1>",
         f'<p class="sub">{_e(name)}: {_e(sources)} · generated {_e(now)} · PEB = √tr J⁻¹ in '
         f"metres at constant σ<sub>r</sub> = {ctx.sigma:g} m</p>",
-        f'<p class="sub">Signal and receiver: {_e(room.signal.describe())}; reach '
-        f"{room.reach:.2f} m. The errors are this receiver's: its window and pick change "
-        "them more than the layout does (BENCHMARKS.md, “The receiver”).</p>",
+        f'<p class="sub">System: {_e(ctx.system.describe())}; reach '
+        f"{ctx.system.reach(room.speed_of_sound):.2f} m. The errors are this system's: its "
+        "receiver and positioning change them more than the layout does (BENCHMARKS.md, "
+        "“The receiver”).</p>",
     ]
 
 
@@ -214,7 +215,7 @@ def _headline(ctx: Context) -> list[str]:
             (_percent(st.get("availability")), "availability (share with a fix)"),
         ]
     cards.append((f"{_num(_summary(best.peb)['mean'])} m", "mean PEB"))
-    share = covered_share(ctx.room, best.anchors, ctx.nodes)
+    share = covered_share(ctx.room, best.anchors, ctx.nodes, system=ctx.system)
     cards.append((_percent(share), "nodes hearing ≥ 4 anchors (line of sight, reach)"))
     for e in ctx.layouts[1:]:
         if e.role in ("comparison", "reference") and e.sim is not None:
@@ -531,21 +532,22 @@ def _regions(ctx: Context, room_dict: dict) -> list[str]:
     ]
 
 
-def _signal(room: Room) -> list[str]:
-    """The chirp, the receiver and the reach they imply."""
-    sig = room.signal
-    d = {f"chirp {k}": v for k, v in sig.chirp.__dict__.items()}
-    d.update({f"receiver {k}": v for k, v in sig.receiver.__dict__.items()})
-    d["reach (m)"] = round(room.reach, 3)
-    d["near limit (m)"] = round(room.near_limit, 3)
+def _system(room: Room, system) -> list[str]:
+    """The system: the chirp, the receiver, the reach they imply, the positioning."""
+    d = {"system": system.name}
+    d.update({f"chirp {k}": v for k, v in system.chirp.__dict__.items()})
+    d.update({f"receiver {k}": v for k, v in system.receiver.__dict__.items()})
+    d["reach (m)"] = round(system.reach(room.speed_of_sound), 3)
+    d["near limit (m)"] = round(system.near_limit(room.speed_of_sound), 3)
+    d.update({f"positioning {k}": v for k, v in system.positioning.__dict__.items()})
     return [
-        "<h3>Signal</h3>",
-        '<p class="sub">The transmitted chirp and the receiver (durations in s, frequencies '
-        "in Hz, window in samples). The reach is the longest range whose chirp the window "
-        "holds enough of (1 ms, or all of a shorter window); a receiver without a "
-        "false-alarm setting has no detection threshold (the paper's); the pick is the "
-        "paper's (the strongest arrival) or the first path's (the earliest that stands "
-        "out).</p>",
+        "<h3>System</h3>",
+        '<p class="sub">The transmitted chirp, the receiver (durations in s, frequencies '
+        "in Hz, window in samples) and the positioning. The reach is the longest range whose "
+        "chirp the window holds enough of (1 ms, or all of a shorter window); a receiver "
+        "without a false-alarm setting has no detection threshold (the paper's); the pick is "
+        "the paper's (the strongest arrival) or the first path's (the earliest that stands "
+        "out); positions kept in the room stay inside its box.</p>",
         _kv(d),
     ]
 
@@ -566,11 +568,10 @@ def _settings_section(ctx: Context) -> list[str]:
     room_dict = room.to_dict()
     walls = _walls(ctx, room_dict)  # takes the floor plan and obstacles out of room_dict
     regions = _regions(ctx, room_dict)  # takes the boxes out of room_dict
-    room_dict.pop("signal", None)
     parts = ["<h2>Settings</h2>", "<h3>Room</h3>"]
     parts.append(_kv({**room_dict, "speed_of_sound (m/s)": round(room.speed_of_sound, 3)}))
     parts += walls + regions
-    parts += _signal(room)
+    parts += _system(room, ctx.system)
     if result is not None:
         keys = ("cost_name", "cost", "nfev", "nit", "success", "message")
         run = {k: result[k] for k in keys if k in result}

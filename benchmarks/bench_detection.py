@@ -27,8 +27,8 @@ from scipy.special import ndtr
 import analysis
 from simulation import Chirp, Receiver, Room, Signal
 from simulation.evaluation import RangingScene
-from simulation.received import synthesize
 from simulation.receiver import HEARD, NOT_HEARD, dsp_for
+from simulation.synthesis import synthesize
 
 
 def false_alarms(n: int, rng) -> list[dict]:

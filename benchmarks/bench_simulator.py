@@ -37,8 +37,8 @@ from simulation.evaluation import RangingScene
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import noise_sigma
 from simulation.positioning import locate
-from simulation.received import synthesize, synthesize_direct
 from simulation.receiver import dsp_for, reference_chain
+from simulation.synthesis import synthesize, synthesize_direct
 
 # the pyroomacoustics peer is test code (tests/peer.py), not part of the package
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))

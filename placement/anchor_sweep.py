@@ -151,13 +151,15 @@ def _shared_table(first, most: int, seed: int):
     if n < most:
         raise ValueError(f"anchors: {most} anchors exceed the {n} candidate points "
                          f"(spacing {opt.spacing_for(room):g} m) of this room")  # fmt: skip
-    return build_table(room, opt, first.nodes, seed, first.executor, first.progress)
+    return build_table(room, opt, first.nodes, seed, first.executor, first.progress,
+                       system=first.system)  # fmt: skip
 
 
 def sweep(
     room: Room | None = None,
     anchors=range(4, 11),
     *,
+    system=None,
     target_p95: float | None = None,
     target_availability: float = 0.99,
     on_row=None,
@@ -181,6 +183,8 @@ def sweep(
     P95 (m) ≤ ``target_p95`` (when given).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
+    system : the positioning system (:class:`simulation.System`, a preset's name or None:
+        the paper's).
     on_row : an optional callable ``on_row(M, row)`` called after each M.
     """
     from placement.plan import Planner
@@ -194,7 +198,7 @@ def sweep(
     target_availability = checks.real(
         "target_availability", target_availability, low=0.0, high=1.0, low_open=True
     )
-    kw = {"cost": cost, "initial": initial, "search": search, "swarm": swarm,
+    kw = {"system": system, "cost": cost, "initial": initial, "search": search, "swarm": swarm,
           "finalists": finalists, "validation": validation, "effort": effort, "nodes": nodes,
           "executor": executor, "progress": progress}  # fmt: skip
     seed = streams.entropy("rng", rng)
@@ -221,6 +225,7 @@ def sweep(
             "rng": seed,
             "effort": first.effort.name,
             "search": first.search.__dict__,
+            "system": first.system.to_dict(),
         },
         timings={"table": t_table, "total": time.perf_counter() - t0},
         target_availability=target_availability,

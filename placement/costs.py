@@ -18,9 +18,9 @@ import numpy as np
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
 from placement.rangetable import check_mount_tolerance, range_table, table_errors
 from simulation import checks, degeneracy
-from simulation.positioning import KEEP_IN_ROOM
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
+from simulation.system import System, as_system
 
 #: statistics of the simulated Euclidean errors usable as a cost (+inf when an error is not
 #: finite); one home: :data:`simulation.statistics.STATISTICS`
@@ -36,8 +36,8 @@ class SimulatedCost:
     Each call simulates ``realizations`` noisy realizations of the full chirp pipeline
     (:func:`simulation.evaluate_layout`) on ``nodes`` (default: the room's grid) with noise
     drawn from the given generator, with the receiver DSP in ``precision`` (see
-    :data:`simulation.receiver.DEFAULT_PRECISION`), positions kept inside the room
-    (:data:`~simulation.positioning.KEEP_IN_ROOM`).
+    :data:`simulation.receiver.DEFAULT_PRECISION`) and the ``system`` simulated (default
+    the paper's).
     """
 
     room: Room = field(default_factory=Room.techtile)
@@ -45,6 +45,7 @@ class SimulatedCost:
     realizations: int = 1
     nodes: np.ndarray | None = None
     precision: str = "float32"
+    system: System = field(default_factory=System)
 
     def __post_init__(self) -> None:
         checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
@@ -63,7 +64,7 @@ class SimulatedCost:
             rng=rng,
             nodes=self.nodes,
             precision=self.precision,
-            bounded=KEEP_IN_ROOM,
+            system=self.system,
         )
         return SIMULATED_STATISTICS[self.statistic](np.asarray(ev.errors, dtype=float))
 
@@ -80,6 +81,7 @@ class DrawsCost:
     point in its surface plane; positioning uses the planned points. The cost is then a
     deterministic function of the layout (the generator is ignored), so a swarm compares
     its particles without noise between them (docs/model.md, "Range tables and scene draws").
+    ``system``: the system simulated (default the paper's).
     """
 
     room: Room
@@ -89,6 +91,7 @@ class DrawsCost:
     seed: int = 0
     statistic: str = "variance"
     precision: str = "float32"
+    system: System = field(default_factory=System)
 
     def __post_init__(self) -> None:
         checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
@@ -115,6 +118,7 @@ class DrawsCost:
             rng=self.seed,
             chunk=len(a),
             precision=self.precision,
+            system=self.system,
         )
         return table_errors(table, np.arange(len(a))[None])[0]
 
@@ -174,12 +178,14 @@ def make_cost(
     realizations: int = 1,
     nodes=None,
     sigma: float = DEFAULT_SIGMA,
+    system=None,
 ) -> Callable[[np.ndarray, np.random.Generator], float]:
     """Turn a cost name or callable into a ``cost(anchors, rng) -> float`` object.
 
     Names: "variance" (paper default), "mean", "p95", "rms" (simulated Euclidean errors
-    with ``realizations`` noise realizations per evaluation) and "peb" (mean PEB with
-    constant ``sigma``). Objects that already take ``(anchors, rng)`` pass through.
+    of ``system``, default the paper's, with ``realizations`` noise realizations per
+    evaluation) and "peb" (mean PEB with constant ``sigma``). Objects that already take
+    ``(anchors, rng)`` pass through.
     """
     if isinstance(cost, SimulatedCost | PEBCost | CallableCost):
         return cost
@@ -187,7 +193,8 @@ def make_cost(
         if cost == "peb":
             return PEBCost(room, sigma=sigma, nodes=nodes)
         if is_simulated(cost):
-            return SimulatedCost(room, cost, realizations=realizations, nodes=nodes)
+            return SimulatedCost(room, cost, realizations=realizations, nodes=nodes,
+                                 system=as_system(system))  # fmt: skip
         raise ValueError(f"cost: unknown name {cost!r}; allowed: {list(COST_NAMES)} or a callable")
     if callable(cost):
         return CallableCost(cost, getattr(cost, "__name__", "callable"))

@@ -29,6 +29,7 @@ from placement.streams import phase_seed
 from placement.surfaces import random_layout
 from simulation import streams
 from simulation.room import Room
+from simulation.system import as_system
 
 logger = logging.getLogger(__name__)
 
@@ -98,10 +99,11 @@ def analytic_initial(
     return out
 
 
-def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes, entropy) -> str:
+def _search_fingerprint(room, system, M, opt: SearchOptions, statistic, nodes, entropy) -> str:
     return fingerprint(
         {
             "room": room.to_dict(),
+            "system": system.to_dict(),
             "M": M,
             "search": dataclasses.asdict(opt),
             "statistic": statistic,
@@ -112,15 +114,18 @@ def _search_fingerprint(room: Room, M: int, opt: SearchOptions, statistic, nodes
 
 
 def build_table(
-    room: Room, options: SearchOptions, nodes, seed: int, executor=None, progress: bool = False
-):
+    room: Room, options: SearchOptions, nodes, seed: int, executor=None, progress: bool = False,
+    system=None,
+):  # fmt: skip
     """The range table of the run ``seed_then_pso(room, M, rng=seed, search=options,
-    nodes=nodes)`` (the same for every M; :func:`placement.simselect.search_table` on the
-    run's stream "table"), with a progress bar when ``progress``."""
+    nodes=nodes, system=system)`` (the same for every M;
+    :func:`placement.simselect.search_table` on the run's stream "table"), with a progress
+    bar when ``progress``."""
     from placement.simselect import search_table
 
     bar = ProgressBar(progress, "range table")
-    table = search_table(room, options, nodes, phase_seed(seed, "table"), executor, bar.update)
+    table = search_table(room, options, nodes, phase_seed(seed, "table"), executor, bar.update,
+                         system=system)  # fmt: skip
     bar.close()
     return table
 
@@ -139,8 +144,10 @@ def search_initial(
     workers: int,
     checkpoint: Path | None = None,
     progress: bool = False,
+    system=None,
 ) -> tuple[list[InitialLayout], dict[str, Any]]:
-    """The starting layouts of a simulated cost: the ``options.keep`` best distinct optima of
+    """The starting layouts of a simulated cost (the ``system`` simulated, default the
+    paper's): the ``options.keep`` best distinct optima of
     :func:`placement.simselect.simulated_select` on the range table (``table``: a
     :class:`~placement.rangetable.RangeTable`, or a callable that builds it), and the
     search's summary. With a ``checkpoint``, a finished search is saved beside it
@@ -150,8 +157,9 @@ def search_initial(
 
     sidecar = None if checkpoint is None else checkpoint.with_name(checkpoint.name + ".search.json")
     seed = streams.entropy("rng", rng)
+    system = as_system(system)
     origin = seed if callable(table) else [table.seed, list(table.ranges.shape)]
-    print_ = _search_fingerprint(room, M, options, statistic, nodes, origin)
+    print_ = _search_fingerprint(room, system, M, options, statistic, nodes, origin)
     if sidecar is not None and sidecar.exists():
         saved = _load_sidecar(sidecar)
         if saved.get("fingerprint") == print_:

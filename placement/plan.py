@@ -57,6 +57,7 @@ from placement.workers import executor_workers
 from simulation import checks, degeneracy, streams
 from simulation.room import Room, room_or_default
 from simulation.statistics import cost_unit
+from simulation.system import as_system
 
 logger = logging.getLogger(__name__)
 
@@ -65,6 +66,7 @@ def seed_then_pso(
     room: Room | None = None,
     M: int = 8,
     *,
+    system=None,
     cost="variance",
     initial="auto",
     search: SearchOptions | None = None,
@@ -84,6 +86,10 @@ def seed_then_pso(
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     M : the number of anchors (4 … 100).
+    system : the positioning system the installation will run (:class:`simulation.System`,
+        a preset's name or None: the paper's, :meth:`simulation.System.paper`): its chirp
+        and receiver are simulated and its positioning solves every fix; recorded in the
+        result.
     cost : "variance" (the paper's), "mean", "p95" or "rms" of the simulated Euclidean
         error over the scene draws (:class:`placement.costs.DrawsCost`); "peb" (mean PEB at
         the default range σ, :data:`analysis.fim.DEFAULT_SIGMA`; a
@@ -115,7 +121,8 @@ def seed_then_pso(
     callback : ``callback(PSOResult-like state)`` after every swarm iteration.
     progress : tqdm progress bars on stderr for every long phase.
     """
-    planner = Planner(room, M, cost=cost, initial=initial, search=search, swarm=swarm,
+    planner = Planner(room, M, system=system, cost=cost, initial=initial, search=search,
+                      swarm=swarm,
                       finalists=finalists, validation=validation, effort=effort, nodes=nodes,
                       rng=rng,
                       executor=executor, checkpoint=checkpoint, callback=callback,
@@ -170,11 +177,14 @@ class Planner:
     ``validation_result`` (:meth:`validate`), and ``seconds`` and ``nfev`` per phase.
     """
 
-    def __init__(self, room, M, *, cost="variance", initial="auto", search=None, swarm=None,
+    def __init__(self, room, M, *, system=None, cost="variance", initial="auto", search=None,
+                 swarm=None,
                  finalists=None, validation=None, effort="default", nodes=None, rng=0,
                  executor=None,
                  checkpoint=None, callback=None, progress=True, table=None):  # fmt: skip
         self.room = room = room_or_default(room)
+        self.system = as_system(system)
+        self.system.check_room(room)
         self.M = checks.count("M", M, low=4, high=MAX_ANCHORS)
         self.cost, self.label, self.simulated = cost, cost_name(cost), is_simulated(cost)
         self.effort = preset = effort_options(effort)
@@ -189,7 +199,7 @@ class Planner:
             raise ValueError(f"finalists.count: must be an integer in [1, {self.swarm.particles}] "
                              f"(the swarm's particles), got {self.finalists.count}")  # fmt: skip
         self.nodes = None if nodes is None else room.check_nodes(nodes)
-        self.cost_fn = make_cost(cost, room, nodes=self.nodes)
+        self.cost_fn = make_cost(cost, room, nodes=self.nodes, system=self.system)
         self.sigma = float(getattr(self.cost_fn, "sigma", DEFAULT_SIGMA))
         self.seed = streams.entropy("rng", rng)
         self.executor, self.workers = executor, executor_workers(executor)
@@ -222,7 +232,7 @@ class Planner:
         self._t0 = self._last = time.perf_counter()
         if self.checkpoint is not None:
             self.store = resume.PhaseStore(self.checkpoint, self.identity())
-        self.reach = reach_check(self.room, self.nodes)
+        self.reach = reach_check(self.room, self.system, self.nodes)
         self.find_initial()
         self.run_swarm()
         self.refine()
@@ -240,7 +250,7 @@ class Planner:
                 room, M, statistic=self.cost, options=self.search, nodes=self.nodes,
                 rng=phase_seed(self.seed, "search"), sigma=self.sigma, executor=self.executor,
                 workers=self.workers, checkpoint=self.checkpoint, progress=self.progress,
-                table=self.range_table,
+                table=self.range_table, system=self.system,
             )  # fmt: skip
             self._lap("search", self.search_summary.get("nfev"))
         elif isinstance(initial, str):
@@ -360,6 +370,7 @@ class Planner:
                 self.room, self.anchors, rng=phase_seed(self.seed, "validation"),
                 options=self.validation, mount_tolerance=self.search.mount_tolerance,
                 nodes=self.nodes, sigma=self.sigma, executor=self.executor, progress=bar.update,
+                system=self.system,
             )  # fmt: skip
             bar.close()
         v = self.validation
@@ -373,7 +384,8 @@ class Planner:
         res, phases = self.swarm_result, self.phases()
         success = res.success and not _degenerate(self.anchors)
         return PlacementResult(
-            room=self.room, anchors=self.anchors, cost=self.chosen_cost, cost_name=self.label,
+            room=self.room, system=self.system, anchors=self.anchors, cost=self.chosen_cost,
+            cost_name=self.label,
             cost_unit=cost_unit(self.label), history=res.history,
             best_anchors_history=res.best_anchors_history, nit=res.nit,
             nfev=sum(p["nfev"] for p in phases.values()), phases=phases,
@@ -395,7 +407,7 @@ class Planner:
         those of the swarm's cost: the run's stream "table")."""
         if self.table is None:
             self.table = build_table(self.room, self.search, self.nodes, self.seed,
-                                     self.executor, self.progress)  # fmt: skip
+                                     self.executor, self.progress, system=self.system)  # fmt: skip
         return self.table
 
     def draws_cost(self, draws: int, exact: int, key: str, nodes_key: str) -> DrawsCost:
@@ -406,7 +418,7 @@ class Planner:
         return DrawsCost(self.room, sets, exact_draws=exact,
                          mount_tolerance=self.search.mount_tolerance,
                          seed=phase_seed(self.seed, key), statistic=self.cost,
-                         precision=self.search.precision)  # fmt: skip
+                         precision=self.search.precision, system=self.system)  # fmt: skip
 
     def identity(self) -> dict[str, Any]:
         """What identifies the run for its checkpoint: the room, every setting, the nodes."""
@@ -414,7 +426,8 @@ class Planner:
         for key in ("search_result", "reach"):  # outcomes, not settings
             s.pop(key)
         nodes = None if self.nodes is None else self.nodes.tolist()
-        return {"room": self.room.to_dict(), "settings": s, "nodes": nodes}
+        return {"room": self.room.to_dict(), "system": self.system.to_dict(), "settings": s,
+                "nodes": nodes}  # fmt: skip
 
     def settings(self) -> PlanSettings:
         """Every setting of the run, for ``result.json``."""
@@ -478,26 +491,29 @@ def _degenerate(anchors) -> bool:
     return degeneracy.geometry(anchors) in ("collinear", "coincident")
 
 
-def reach_check(room: Room, nodes=None) -> dict[str, Any]:
-    """The signal's reach against the room: the reach and near limit (m,
-    :class:`simulation.Signal`), and the longest and shortest distances between the nodes
+def reach_check(room: Room, system=None, nodes=None) -> dict[str, Any]:
+    """The signal's reach against the room: the reach and near limit (m) of ``system``'s
+    chirp and receiver (:class:`simulation.System`), and the longest and shortest
+    distances between the nodes
     (default ``room.grid()``) and the allowed mounting points. Logs a warning when the
     room is larger than the reach (or a node nearer a mounting point than the near limit):
     anchors that far give no range, and nodes may be left without a fix."""
     from placement.surfaces import rectangle_corners
 
+    system = as_system(system)
+    reach, near_limit = system.reach(room.speed_of_sound), system.near_limit(room.speed_of_sound)
     grid = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     # the farthest point of a rectangle from a node is one of its corners
     corners = rectangle_corners(room).reshape(-1, 3)
     far = np.max(np.linalg.norm(grid[:, None] - corners[None], axis=-1))
     near = np.linalg.norm(grid - project(room, grid), axis=-1).min()
     out = {
-        "reach_m": room.reach,
-        "near_limit_m": room.near_limit,
+        "reach_m": reach,
+        "near_limit_m": near_limit,
         "farthest_m": float(far),
         "nearest_m": float(near),
     }
-    out["exceeded"] = bool(out["farthest_m"] > room.reach or out["nearest_m"] < room.near_limit)
+    out["exceeded"] = bool(out["farthest_m"] > reach or out["nearest_m"] < near_limit)
     if out["exceeded"]:
         logger.warning(
             "the room is larger than the signal's reach: mounting points lie up to %.1f m "
@@ -505,10 +521,10 @@ def reach_check(room: Room, nodes=None) -> dict[str, Any]:
             "%.3g ms); anchors beyond it give no range, the plan scores availability first "
             "and reports the share of node realizations without a fix",
             out["farthest_m"],
-            room.reach,
-            f" and sees nothing nearer than {room.near_limit:.2f} m" if room.near_limit else "",
-            room.signal.chirp.duration * 1e3,
-            room.signal.window_span * 1e3,
-            room.signal.receiver.t_wake * 1e3,
+            reach,
+            f" and sees nothing nearer than {near_limit:.2f} m" if near_limit else "",
+            system.chirp.duration * 1e3,
+            system.window_span * 1e3,
+            system.receiver.t_wake * 1e3,
         )
     return out

@@ -10,6 +10,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from analysis.report_data import system_of
 from placement.finalists import FinalistOptions
 from placement.initial import InitialLayout
 from placement.pso import PSOOptions, PSOResult
@@ -19,6 +20,7 @@ from placement.simselect import SearchOptions
 from placement.validation import Validation, ValidationOptions
 from simulation.room import Room
 from simulation.statistics import cost_unit
+from simulation.system import System
 
 #: status codes of :class:`PlacementResult`
 PLACEMENT_STATUS = {
@@ -102,7 +104,8 @@ class PlacementResult(LayoutResult):
     seconds of every phase and ``total``; phases per phase its ``seconds``, its
     evaluations ``nfev`` and what it counts (``counts``: table layouts scored, swarm
     simulations, draw simulations, validation realizations); nfev their sum; nit the
-    swarm's iterations; settings every setting of the run (:class:`PlanSettings`).
+    swarm's iterations; settings every setting of the run (:class:`PlanSettings`); system
+    the positioning system planned for (:class:`simulation.System`).
     ``to_dict()`` is the
     ``result.json`` format, :meth:`from_dict` reads it back and :meth:`read` reads a
     result folder.
@@ -130,6 +133,7 @@ class PlacementResult(LayoutResult):
     pso: PSOResult | None = field(default=None, repr=False)
     finalists: list[dict[str, Any]] = field(default_factory=list)
     phases: dict[str, dict[str, Any]] = field(default_factory=dict)
+    system: System = field(default_factory=System)
 
     @property
     def availability(self) -> float:
@@ -142,6 +146,7 @@ class PlacementResult(LayoutResult):
         return {
             "kind": "plan",
             "room": self.room.to_dict(),
+            "system": self.system.to_dict(),
             "anchors": self.anchors.tolist(),
             "cost": self.cost,
             "fun": self.cost,
@@ -193,7 +198,8 @@ class PlacementResult(LayoutResult):
             for f in d.get("finalists", [])
         ]
         return cls(
-            room=Room.from_dict(d["room"]),
+            room=Room.from_dict({k: v for k, v in d["room"].items() if k != "signal"}),
+            system=system_of({"result": d}),
             anchors=np.asarray(d["anchors"], dtype=float),
             cost=num(d["cost"]),
             cost_name=d["cost_name"],

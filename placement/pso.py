@@ -407,10 +407,12 @@ def _check_cost(cost, executor) -> Callable:
     return cost
 
 
-def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed, initial) -> str:
+def _fingerprint(room: Room, M: int, options: PSOOptions, cost_label: str, seed, initial,
+                 system=None) -> str:  # fmt: skip
     return fingerprint(
         {
             "room": room.to_dict(),
+            "system": None if system is None else system.to_dict(),
             "M": M,
             "options": {k: v for k, v in asdict(options).items() if k != "eval_timeout"},
             "cost": cost_label,
@@ -710,7 +712,9 @@ def _check_args(
         "progress": progress,
         "callback": callback,
         "eval_timeout": eval_timeout,
-        "fingerprint": _fingerprint(room, M, options, str(label), seed, initial),
+        "fingerprint": _fingerprint(
+            room, M, options, str(label), seed, initial, getattr(cost, "system", None)
+        ),
         "ckpt": None if checkpoint is None else checks.output_path("checkpoint", checkpoint),
     }
 

@@ -38,10 +38,10 @@ import numpy as np
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
 from simulation import checks, streams
-from simulation.positioning import KEEP_IN_ROOM
 from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
+from simulation.system import System, as_system
 
 
 @dataclass(frozen=True)
@@ -51,16 +51,17 @@ class RangeTable:
     candidates (N, 3) planned points (m); nodes (D, P, 3) the nodes of each draw (m);
     ranges (D, P, N) estimated ranges (m; NaN where the receiver reported none: the
     candidate beyond the signal's reach, or not heard); distances (D, P, N) true ranges from the
-    mounted points (m); region (lo (3,), hi (3,)) the room box where positioning starts and
-    stays (:data:`KEEP_IN_ROOM`).
-    seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
+    mounted points (m); room the room and system the system simulated (its positioning
+    solves the table's fixes). seed, mount_tolerance (m), exact_draws and precision
+    describe how it was drawn.
     """
 
     candidates: np.ndarray
     nodes: np.ndarray
     ranges: np.ndarray
     distances: np.ndarray
-    region: tuple[np.ndarray, np.ndarray]
+    room: Room
+    system: System
     seed: int
     mount_tolerance: float
     exact_draws: int
@@ -184,7 +185,8 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
         if exact and exact_scene is not None:
             scene = exact_scene
         else:
-            scene = RangingScene(room, mounted, nodes[d], precision=spec["precision"])
+            scene = RangingScene(room, mounted, nodes[d], system=spec["system"],
+                                 precision=spec["precision"])  # fmt: skip
             exact_scene = scene if exact else None
         dtype = scene.windows.dtype  # single precision for a long window's FFT DSP
         noise = np.stack(
@@ -227,8 +229,10 @@ def range_table(
     chunk: int = 16,
     precision: str = "float32",
     progress=None,
+    system=None,
 ) -> RangeTable:
-    """Simulate every candidate (N, 3) at the nodes of ``draws`` draws (see the module).
+    """Simulate every candidate (N, 3) at the nodes of ``draws`` draws (see the module)
+    with ``system`` (a :class:`simulation.System`; default the paper's).
 
     nodes : (P, 3) the nodes of the exact draws (default ``room.grid()``), or (D, P, 3)
         explicit node sets (then ``draws`` is D).
@@ -256,13 +260,14 @@ def range_table(
         "mount_tolerance": check_mount_tolerance(mount_tolerance),
         "seed": seed,
         "precision": checks.choice("precision", precision, PRECISIONS),
+        "system": as_system(system),
     }
+    spec["system"].check_room(room)
     chunk = checks.count("chunk", chunk, low=1)
     if nodes.ndim == 2:
         nodes = node_draws(room, nodes, draws, spec["exact_draws"], seed)
     ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
-    region = (np.zeros(3), np.asarray(room.size, dtype=float))
-    return RangeTable(cand, nodes, ranges, dist, region, **spec)
+    return RangeTable(cand, nodes, ranges, dist, room, **spec)
 
 
 def extend_table(
@@ -282,6 +287,7 @@ def extend_table(
         "mount_tolerance": table.mount_tolerance,
         "seed": table.seed,
         "precision": table.precision,
+        "system": table.system,
     }
     ranges, dist = _simulate(
         room, new, len(table.candidates), table.nodes, spec, executor, int(chunk)
@@ -313,13 +319,10 @@ def _layout_indices(table: RangeTable, layouts) -> np.ndarray:
 def _fixes(table: RangeTable, layouts):
     """The :class:`~simulation.positioning.PositionFix` of layouts (L, M) of candidates
     over every draw and node of the table, positioned in one batch."""
-    from simulation.positioning import locate
-
     S = _layout_indices(table, layouts)
     ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
-    return locate(
-        table.candidates[S], ranges, region=table.region, bounded=KEEP_IN_ROOM, full_output=True
-    )
+    positioning = table.system.positioning
+    return positioning.locate(table.room, table.candidates[S], ranges, full_output=True)
 
 
 def _errors(table: RangeTable, fix) -> np.ndarray:

@@ -419,11 +419,13 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
 
 
 def search_table(
-    room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None
-) -> RangeTable:
+    room: Room, options: SearchOptions, nodes=None, rng=0, executor=None, progress=None,
+    system=None,
+) -> RangeTable:  # fmt: skip
     """The range table of a search: every point of
     ``candidate_grid(room, options.spacing_for(room))`` on ``options.draws`` scene draws of
-    ``nodes`` (default ``room.grid()``). ``progress(done, total)`` as its chunks finish."""
+    ``nodes`` (default ``room.grid()``) with ``system`` (default the paper's).
+    ``progress(done, total)`` as its chunks finish."""
     cand = candidate_grid(room, options.spacing_for(room))
     return range_table(
         room,
@@ -436,6 +438,7 @@ def search_table(
         executor=executor,
         precision=options.precision,
         progress=progress,
+        system=system,
     )
 
 
@@ -451,9 +454,11 @@ def simulated_select(
     executor: Executor | None = None,
     workers: int = 1,
     progress=None,
+    system=None,
 ) -> SimulatedSelection:
     """Choose M of the candidate points minimizing a simulated error statistic on a range
-    table (the module docstring gives the steps).
+    table (the module docstring gives the steps), simulated with ``system`` (default the
+    paper's) when the table is built here.
 
     table : a table to search (built from ``options`` and ``nodes`` when None); it is
         returned in the result.
@@ -470,7 +475,7 @@ def simulated_select(
     workers = checks.count("workers", workers, low=1, high=1024)
     t0 = time.perf_counter()
     if table is None:
-        table = search_table(room, opt, nodes, seed, executor)
+        table = search_table(room, opt, nodes, seed, executor, system=system)
     if len(table.candidates) < M:
         raise ValueError(f"candidates: need at least M = {M} points, got {len(table.candidates)}")
     t1 = time.perf_counter()

@@ -14,9 +14,9 @@ receiver assumes, and the anchors are mounted with more or less care.
   the plan (in-plane offsets uniform in a disc, :func:`placement.rangetable.mounted_points`)
   while positioning uses the planned coordinates, over ``draws`` draws.
 
-Positions are solved as the plan's validation solves them, kept inside the room
-(:data:`simulation.positioning.KEEP_IN_ROOM`). Every figure is reproducible from ``rng``
-(an int seed, a Generator drawn once, or None).
+Every figure simulates the plan's system (its chirp, receiver and positioning; default the
+paper's). Every figure is reproducible from ``rng`` (an int seed, a Generator drawn once,
+or None).
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from analysis.coverage import covered_share
 from placement.validation import mounted_errors, summary
 from simulation import checks, streams
 from simulation.evaluation import RangingScene, evaluate_layout
-from simulation.positioning import KEEP_IN_ROOM, locate
 from simulation.room import Room, as_room
+from simulation.system import System, as_system
 
 #: the default temperature offsets (°C) and mounting tolerances (m)
 OFFSETS = (-10.0, -5.0, 5.0, 10.0)
@@ -61,42 +61,39 @@ def _row(errors) -> dict[str, float]:
     return {k: float(s[k]) for k in ("std", "mean", "p95", "availability")}
 
 
-def _anchor_down(room: Room, a: np.ndarray, nodes, R: int, seed: int) -> list[dict]:
+def _anchor_down(room: Room, system: System, a, nodes, R: int, seed: int) -> list[dict]:
     rows = []
     for j in range(len(a)):
         rest = np.delete(a, j, axis=0)
-        ev = evaluate_layout(
-            room, rest, realizations=R, rng=seed, nodes=nodes, bounded=KEEP_IN_ROOM
-        )
+        ev = evaluate_layout(room, rest, realizations=R, rng=seed, nodes=nodes, system=system)
         rows.append({"anchor": j, **_row(ev.errors),
-                     "covered_share": covered_share(room, rest, nodes)})  # fmt: skip
+                     "covered_share": covered_share(room, rest, nodes, system=system)})  # fmt: skip
     return rows
 
 
-def _temperature(room: Room, a: np.ndarray, nodes, R: int, offsets, seed: int) -> list[dict]:
+def _temperature(room: Room, system: System, a, nodes, R: int, offsets, seed: int) -> list:
     c = room.speed_of_sound  # what the receiver assumes
-    region = (np.zeros(3), np.asarray(room.size, float))
     rows = []
     for k, dt in enumerate(offsets):
         t = room.temperature + dt
         # the sound's real speed: c ∝ √(absolute temperature), from the configured one
         real = c * np.sqrt((273.15 + t) / (273.15 + room.temperature))
         air = dataclasses.replace(room, temperature=t, sound_speed=float(real))
-        scene = RangingScene(air, a, nodes)
+        scene = RangingScene(air, a, nodes, system=system)
         rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(13, k)))
         windows = np.stack([scene.noisy_windows(rng) for _ in range(R)])
-        ranges, _ = scene.dsp.detect(windows, c, scene.noise_sigma, air.signal.delays,
+        ranges, _ = scene.dsp.detect(windows, c, scene.noise_sigma, system.delays,
                                      scene.distances / air.speed_of_sound)  # fmt: skip
-        x = locate(a, ranges, region=region, bounded=KEEP_IN_ROOM)
+        x = system.positioning.locate(room, a, ranges)
         rows.append({"offset": float(dt), "temperature": t,
                      **_row(np.linalg.norm(x - nodes, axis=-1))})  # fmt: skip
     return rows
 
 
-def _mounting(room: Room, a: np.ndarray, nodes, tolerances, draws: int, seed: int) -> list:
+def _mounting(room: Room, system: System, a, nodes, tolerances, draws: int, seed: int) -> list:
     rows = []
     for tol in tolerances:
-        errors = [mounted_errors(room, a, nodes, float(tol), d, seed, stream=14)
+        errors = [mounted_errors(room, a, nodes, float(tol), d, seed, stream=14, system=system)
                   for d in range(draws)]  # fmt: skip
         rows.append({"tolerance": float(tol), **_row(errors)})
     return rows
@@ -112,12 +109,15 @@ def stress(
     tolerances=TOLERANCES,
     draws: int = 10,
     rng=0,
+    system=None,
 ) -> StressResult:
     """The what-if analyses of a layout (module docstring): anchors (M, 3) on the room's
     mounting surfaces (M ≥ 5, so that one can fail), at ``nodes`` (default the room's
     grid), ``realizations`` noise draws for the anchor-down and temperature figures,
-    ``draws`` mounting draws per tolerance (m), temperature ``offsets`` in °C."""
+    ``draws`` mounting draws per tolerance (m), temperature ``offsets`` in °C, with
+    ``system`` (default the paper's)."""
     room = as_room(room)
+    system = as_system(system)
     a = room.check_anchors(checks.reals("anchors", anchors), min_anchors=5)
     nodes = room.grid() if nodes is None else room.check_nodes(nodes)
     R = checks.count("realizations", realizations, low=1, high=10_000)
@@ -127,13 +127,13 @@ def stress(
     for v in offsets:
         checks.real("temperature + offset", room.temperature + v, low=-40.0, high=60.0)
     seed = streams.entropy("rng", rng)
-    down = _anchor_down(room, a, nodes, R, seed)
+    down = _anchor_down(room, system, a, nodes, R, seed)
     worst = max(range(len(a)), key=lambda j: (-down[j]["availability"], down[j]["mean"]))
     return StressResult(
         anchor_down=down,
         worst_anchor=int(worst),
-        temperature=_temperature(room, a, nodes, R, offsets, seed),
-        mounting=_mounting(room, a, nodes, tolerances, draws, seed),
+        temperature=_temperature(room, system, a, nodes, R, offsets, seed),
+        mounting=_mounting(room, system, a, nodes, tolerances, draws, seed),
         seed=seed,
         settings={
             "realizations": R,
@@ -141,5 +141,6 @@ def stress(
             "offsets": offsets,
             "tolerances": tolerances,
             "nodes": len(nodes),
+            "system": system.to_dict(),
         },  # fmt: skip
     )

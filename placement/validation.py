@@ -18,11 +18,8 @@ Three checks, each with its own independent noise:
   ``mount_tolerance``, together, one noise realization; positions solved with the planned
   points, as for the mounting error.
 
-Every check solves positions the same way, as an installed system that knows its room
-would: started inside the room (its centre, or the linear solution when that lies in the
-room), every iterate kept inside the room's box (:data:`simulation.positioning.KEEP_IN_ROOM`;
-docs/model.md, "Positioning"). The field check states the other convention beside its
-figure: the same fixes with unbounded iterates.
+Every check simulates the plan's system (:class:`simulation.System`: its chirp, receiver
+and positioning; docs/model.md, "Positioning").
 """
 
 from __future__ import annotations
@@ -38,9 +35,9 @@ from analysis.fim import DEFAULT_SIGMA, peb
 from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks, streams
-from simulation.positioning import KEEP_IN_ROOM
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
+from simulation.system import as_system
 
 
 @dataclass(frozen=True)
@@ -75,9 +72,9 @@ class ValidationOptions:
 
 @dataclass(frozen=True)
 class ErrorSummary:
-    """Euclidean position errors summarized over the fixes: σ (population), mean, P95 and
-    RMS (m), ``n`` fixes, ``n_invalid`` realizations without one, and the availability,
-    n / (n + n_invalid) (:func:`simulation.statistics.error_stats`)."""
+    """Euclidean position errors summarized over the fixes: σ (population), mean, P95,
+    RMS and median (m), ``n`` fixes, ``n_invalid`` realizations without one, and the
+    availability, n / (n + n_invalid) (:func:`simulation.statistics.error_stats`)."""
 
     std: float
     mean: float
@@ -86,14 +83,15 @@ class ErrorSummary:
     n: int
     n_invalid: int
     availability: float
+    median: float = math.nan
 
     def summary_dict(self) -> dict[str, Any]:
-        """The seven figures as a plain dict, in the order above."""
+        """The eight figures as a plain dict, in the order above."""
         return {k: getattr(self, k) for k in _SUMMARY_KEYS}
 
     @staticmethod
     def summary_from(d: dict[str, Any]) -> dict[str, Any]:
-        """The seven figures' keyword arguments from a JSON block (nulls as NaN)."""
+        """The eight figures' keyword arguments from a JSON block (nulls as NaN)."""
         return {k: _num(d.get(k), int if k.startswith("n") else float) for k in _SUMMARY_KEYS}
 
     @staticmethod
@@ -106,7 +104,7 @@ class ErrorSummary:
 class NodesSummary(ErrorSummary):
     """One held-out node set's errors and its ``nodes`` count."""
 
-    nodes: int
+    nodes: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         return {**self.summary_dict(), "nodes": self.nodes}
@@ -140,8 +138,8 @@ class MountingCheck(ErrorSummary):
     """The mounting-error check: the errors at the evaluation nodes over ``draws``
     mountings within ``tolerance_m`` of the plan."""
 
-    tolerance_m: float
-    draws: int
+    tolerance_m: float = 0.0
+    draws: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         return {"tolerance_m": self.tolerance_m, "draws": self.draws, **self.summary_dict()}
@@ -155,26 +153,21 @@ class MountingCheck(ErrorSummary):
 @dataclass(frozen=True)
 class FieldCheck(ErrorSummary):
     """The field check: ``draws`` of ``tags_per_draw`` random tags with the anchors mounted
-    within ``tolerance_m`` of the plan; ``unbounded`` the same fixes solved with unbounded
-    iterates (the other positioning convention, stated beside)."""
+    within ``tolerance_m`` of the plan."""
 
-    draws: int
-    tags_per_draw: int
-    tolerance_m: float
-    unbounded: ErrorSummary | None = None
+    draws: int = 0
+    tags_per_draw: int = 0
+    tolerance_m: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
-        out = {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
-               "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
-        if self.unbounded is not None:
-            out["unbounded"] = self.unbounded.summary_dict()
-        return out
+        return {"draws": self.draws, "tags_per_draw": self.tags_per_draw,
+                "tolerance_m": self.tolerance_m, **self.summary_dict()}  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> FieldCheck:
         return cls(**cls.summary_from(d), draws=int(d["draws"]),
-                   tags_per_draw=int(d["tags_per_draw"]), tolerance_m=float(d["tolerance_m"]),
-                   unbounded=ErrorSummary.read(d.get("unbounded")))  # fmt: skip
+                   tags_per_draw=int(d["tags_per_draw"]),
+                   tolerance_m=float(d["tolerance_m"]))  # fmt: skip
 
 
 #: the per-node figures of the grid check
@@ -190,10 +183,9 @@ class Validation:
     errors, ``n_invalid`` without a fix and the ``availability``; ``mean_peb`` (m, √tr J⁻¹
     at the constant σ of ``peb_definition``); ``per_node`` (P,) arrays by
     :data:`PER_NODE_KEYS` (availability, RMSE, σ, the paper's DOP, the RMS-based DOP);
-    ``errors`` (R, P) m, NaN without a fix; ``unbounded`` the same fixes solved with
-    unbounded iterates (the other positioning convention, stated beside). Then the other
-    checks that ran (None otherwise): ``held_out``, ``mounting``, ``field``; and a
-    ``message`` when some realizations have no fix or some errors are not finite.
+    ``errors`` (R, P) m, NaN without a fix; ``median`` (m). Then the other checks that
+    ran (None otherwise): ``held_out``, ``mounting``, ``field``; and a ``message`` when
+    some realizations have no fix or some errors are not finite.
     """
 
     realizations: int
@@ -208,7 +200,7 @@ class Validation:
     peb_definition: str
     per_node: dict[str, np.ndarray]
     errors: np.ndarray
-    unbounded: ErrorSummary | None = None
+    median: float = math.nan
     held_out: HeldOut | None = None
     mounting: MountingCheck | None = None
     field: FieldCheck | None = None
@@ -218,13 +210,11 @@ class Validation:
         """The plain-JSON form (errors rounded to the µm)."""
         out: dict[str, Any] = {
             k: getattr(self, k)
-            for k in ("realizations", "seed", "std", "mean", "p95", "rms", "n_invalid",
-                      "availability", "mean_peb", "peb_definition")
+            for k in ("realizations", "seed", "std", "mean", "p95", "rms", "median",
+                      "n_invalid", "availability", "mean_peb", "peb_definition")
         }  # fmt: skip
         out["per_node"] = {k: np.asarray(v).tolist() for k, v in self.per_node.items()}
         out["errors"] = np.round(np.asarray(self.errors, dtype=float), 6).tolist()
-        if self.unbounded is not None:
-            out["unbounded"] = self.unbounded.summary_dict()
         for key in ("held_out", "mounting", "field"):
             if getattr(self, key) is not None:
                 out[key] = getattr(self, key).to_dict()
@@ -241,19 +231,18 @@ class Validation:
         return cls(
             realizations=int(d["realizations"]),
             seed=int(d["seed"]),
-            **{k: _num(d.get(k)) for k in ("std", "mean", "p95", "rms", "availability",
-                                           "mean_peb")},
+            **{k: _num(d.get(k)) for k in ("std", "mean", "p95", "rms", "median",
+                                           "availability", "mean_peb")},
             n_invalid=int(d.get("n_invalid", 0)),
             peb_definition=str(d.get("peb_definition", "")),
             per_node={k: _array(v) for k, v in d.get("per_node", {}).items()},
             errors=_array(d.get("errors", [])),
-            unbounded=ErrorSummary.read(d.get("unbounded")),
             **{k: c.from_dict(d[k]) for k, c in blocks.items() if d.get(k)},
             message=d.get("message"),
         )  # fmt: skip
 
 
-_SUMMARY_KEYS = ("std", "mean", "p95", "rms", "n", "n_invalid", "availability")
+_SUMMARY_KEYS = ("std", "mean", "p95", "rms", "n", "n_invalid", "availability", "median")
 
 
 def _num(v, kind=float):
@@ -267,11 +256,11 @@ def _array(v) -> np.ndarray:
 
 
 def summary(errors) -> dict[str, float]:
-    """σ (population), mean, P95 and RMS (m) of the fixes among Euclidean errors, how many,
-    and the availability, the share of node realizations with a fix
+    """σ (population), mean, P95, RMS and median (m) of the fixes among Euclidean errors,
+    how many, and the availability, the share of node realizations with a fix
     (:func:`simulation.statistics.error_stats`)."""
     s = error_stats(np.asarray(errors, dtype=float).ravel())
-    return {k: s[k] for k in ("std", "mean", "p95", "rms", "n", "n_invalid", "availability")}
+    return {k: s[k] for k in _SUMMARY_KEYS}
 
 
 def held_out_grid(room: Room) -> np.ndarray:
@@ -316,62 +305,56 @@ def _uniform_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
-def _evaluate(room, anchors, nodes, realizations, seed, precision):
+def _evaluate(room, system, anchors, nodes, realizations, seed, precision):
     from simulation.evaluation import evaluate_layout
 
-    return evaluate_layout(
-        room,
-        anchors,
-        realizations=realizations,
-        rng=seed,
-        nodes=nodes,
-        precision=precision,
-        bounded=KEEP_IN_ROOM,
-    )
+    return evaluate_layout(room, anchors, realizations=realizations, rng=seed, nodes=nodes,
+                           precision=precision, system=system)  # fmt: skip
 
 
 def mounted_errors(
-    room, anchors, nodes, tolerance, draw, seed, precision=None, stream: int = 7
+    room, anchors, nodes, tolerance, draw, seed, precision=None, stream: int = 7, system=None
 ) -> np.ndarray:
     """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
     ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
-    stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors,
-    kept inside the room (``precision``: the receiver DSP's, None for the default)."""
-    ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream)
-    return _errors(room, anchors, nodes, ranges, bounded=KEEP_IN_ROOM)
+    stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors by the
+    ``system``'s positioning (``precision``: the receiver DSP's, None for the default)."""
+    system = as_system(system)
+    ranges = _mounted_ranges(room, system, anchors, nodes, tolerance, draw, seed, precision,
+                             stream)  # fmt: skip
+    return _errors(room, system, anchors, nodes, ranges)
 
 
-def field_errors(room, anchors, tags: int, tolerance, draw, seed, precision=None) -> np.ndarray:
-    """(2, tags) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
+def field_errors(
+    room, anchors, tags: int, tolerance, draw, seed, precision=None, system=None
+) -> np.ndarray:
+    """(tags,) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
     random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
     anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
-    the same draw), one noise realization; row 0 with the positions solved as every
-    check solves them (kept inside the room), row 1 with unbounded iterates."""
+    the same draw), one noise realization, positions solved by the ``system``'s
+    positioning."""
     nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
-    ranges = _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, 1)
-    conventions = (KEEP_IN_ROOM, not KEEP_IN_ROOM)
-    return np.stack([_errors(room, anchors, nodes, ranges, bounded=b) for b in conventions])
+    return mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision, 1, system)
 
 
-def _mounted_ranges(room, anchors, nodes, tolerance, draw, seed, precision, stream):
+def _mounted_ranges(room, system, anchors, nodes, tolerance, draw, seed, precision, stream):
     """(P, M) ranges of one noise draw with the anchors mounted as in draw ``draw``."""
     from simulation.evaluation import DEFAULT_PRECISION, RangingScene
 
     ids = np.arange(len(anchors))
     mounted = mounted_points(room, anchors, ids, draw, tolerance, False, seed)
-    scene = RangingScene(room, mounted, nodes, precision=precision or DEFAULT_PRECISION)
+    scene = RangingScene(room, mounted, nodes, system=system,
+                         precision=precision or DEFAULT_PRECISION)  # fmt: skip
     return scene.ranges(
         np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream, draw)))
     )
 
 
-def _errors(room, anchors, nodes, ranges, bounded: bool) -> np.ndarray:
-    """(P,) errors (m) of the positions solved from ``ranges`` with the planned anchors,
-    started inside the room (the iterates kept inside it when ``bounded``)."""
-    from simulation.positioning import locate
-
-    region = (np.zeros(3), np.asarray(room.size, float))
-    return np.linalg.norm(locate(anchors, ranges, region=region, bounded=bounded) - nodes, axis=-1)
+def _errors(room, system, anchors, nodes, ranges) -> np.ndarray:
+    """(P,) errors (m) of the positions solved from ``ranges`` with the planned anchors by
+    the ``system``'s positioning."""
+    x = system.positioning.locate(room, anchors, ranges)
+    return np.linalg.norm(x - nodes, axis=-1)
 
 
 def validate_layout(
@@ -385,9 +368,11 @@ def validate_layout(
     sigma: float = DEFAULT_SIGMA,
     executor: Executor | None = None,
     progress=None,
+    system=None,
 ) -> Validation | None:
-    """The four checks of the module docstring for anchors (M, 3): a :class:`Validation`
-    (None with ``options.realizations == 0``). Each check draws its noise from its
+    """The four checks of the module docstring for anchors (M, 3) with ``system`` (default
+    the paper's): a :class:`Validation` (None with ``options.realizations == 0``). Each
+    check draws its noise from its
     own stream of ``rng`` (an int seed, a numpy Generator drawn once, or None). Checks run
     on ``executor`` when given; the result does not depend on it. ``progress(done,
     total)`` is called as the checks' parts finish.
@@ -399,11 +384,11 @@ def validate_layout(
     nodes = room.grid() if nodes is None else np.asarray(nodes, dtype=float)
     if opt.realizations == 0:
         return None
-    calls = _calls(room, a, nodes, opt, mount_tolerance, seed)
+    calls = _calls(room, as_system(system), a, nodes, opt, mount_tolerance, seed)
     flat = [c for group in calls.values() for c in group]
     results = iter(run_calls(executor, flat, progress=progress))
     jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
-    grid = _grid_block(room, jobs["grid"], a, nodes, opt, seed, sigma)
+    grid = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
     message = None
     if grid["availability"] < 1:
         message = (
@@ -415,7 +400,7 @@ def validate_layout(
     return Validation(**grid, **_other_blocks(jobs, opt, mount_tolerance), message=message)
 
 
-def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) -> dict:
+def _calls(room, system, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) -> dict:
     """The validation's work by check, as (function, args) calls, each on its own stream of
     ``seed``."""
     child = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(5)]
@@ -424,29 +409,33 @@ def _calls(room, a, nodes, opt: ValidationOptions, tolerance: float, seed: int) 
     halves_seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child[0]).spawn(2)]
     P = opt.precision
     calls: dict[str, list] = {
-        "grid": [(_evaluate, (room, a, nodes, R, s, P))
+        "grid": [(_evaluate, (room, system, a, nodes, R, s, P))
                  for R, s in zip(halves, halves_seeds, strict=True) if R > 0]
     }  # fmt: skip
     if opt.held_out_realizations:
         R = opt.held_out_realizations
         rnd = random_nodes(room, opt.random_nodes, np.random.default_rng(child[1]))
-        calls["held_grid"] = [(_evaluate, (room, a, held_out_grid(room), R, child[2], P))]
-        calls["held_random"] = [(_evaluate, (room, a, rnd, R, child[3], P))]
+        held = held_out_grid(room)
+        calls["held_grid"] = [(_evaluate, (room, system, a, held, R, child[2], P))]
+        calls["held_random"] = [(_evaluate, (room, system, a, rnd, R, child[3], P))]
     if opt.mount_draws and tolerance > 0:
-        calls["mounting"] = [(mounted_errors, (room, a, nodes, tolerance, d, child[0], P))
-                             for d in range(opt.mount_draws)]  # fmt: skip
+        calls["mounting"] = [
+            (mounted_errors, (room, a, nodes, tolerance, d, child[0], P, 7, system))
+            for d in range(opt.mount_draws)
+        ]
     if opt.field_draws:
-        calls["field"] = [(field_errors, (room, a, opt.random_nodes, tolerance, d, child[4], P))
-                          for d in range(opt.field_draws)]  # fmt: skip
+        tags = opt.random_nodes
+        calls["field"] = [
+            (field_errors, (room, a, tags, tolerance, d, child[4], P, system))
+            for d in range(opt.field_draws)
+        ]
     return calls
 
 
-def _grid_block(room, parts, a, nodes, opt: ValidationOptions, seed, sigma) -> dict[str, Any]:
+def _grid_block(parts, a, nodes, opt: ValidationOptions, seed, sigma) -> dict[str, Any]:
     """The grid check's fields of :class:`Validation` from its evaluations ``parts``."""
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
-    ranges = np.concatenate([p.ranges for p in parts])
-    other = _errors(room, a, nodes, ranges, bounded=not KEEP_IN_ROOM)
     return {
         "realizations": int(opt.realizations),
         "seed": int(seed),
@@ -461,7 +450,6 @@ def _grid_block(room, parts, a, nodes, opt: ValidationOptions, seed, sigma) -> d
             "dop_rms": dop_rms(e, range_errors),
         },
         "errors": e,
-        "unbounded": ErrorSummary(**summary(other)),
     }
 
 
@@ -480,9 +468,9 @@ def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[
         out["mounting"] = MountingCheck(**mounting, tolerance_m=float(tolerance),
                                         draws=int(opt.mount_draws))  # fmt: skip
     if "field" in jobs:
-        both = np.concatenate(jobs["field"], axis=1)  # (2, draws · tags)
-        out["field"] = FieldCheck(**summary(both[0]), unbounded=ErrorSummary(**summary(both[1])),
-                                  draws=int(opt.field_draws), tags_per_draw=int(opt.random_nodes),
+        errors = np.concatenate(jobs["field"])  # (draws · tags,)
+        out["field"] = FieldCheck(**summary(errors), draws=int(opt.field_draws),
+                                  tags_per_draw=int(opt.random_nodes),
                                   tolerance_m=float(tolerance))  # fmt: skip
     return out
 

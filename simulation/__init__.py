@@ -12,7 +12,7 @@ from simulation.positioning import PositionFix, locate
 from simulation.received import received_windows
 from simulation.receiver import Dsp, Receiver, dsp_for, reference_chain
 from simulation.room import SURFACES, Room
-from simulation.signal import Signal
+from simulation.system import PRESETS, Positioning, System
 
 __all__ = [
     "SURFACES",
@@ -25,7 +25,9 @@ __all__ = [
     "RangingScene",
     "Receiver",
     "Room",
-    "Signal",
+    "PRESETS",
+    "Positioning",
+    "System",
     "aim_vectors",
     "cardioid",
     "compute_paths",

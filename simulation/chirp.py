@@ -28,6 +28,11 @@ class Chirp:
         checks.real("duration", self.duration, low=0.0, high=1.0, low_open=True, unit="s")
 
     @property
+    def centre(self) -> float:
+        """The centre frequency (f0 + f1)/2 in Hz: where the air's attenuation is taken."""
+        return 0.5 * (self.f0 + self.f1)
+
+    @property
     def rate(self) -> float:
         """Sweep rate k = (f1 − f0)/T in Hz/s."""
         return (self.f1 - self.f0) / self.duration

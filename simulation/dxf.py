@@ -1,6 +1,6 @@
 """Floor plans in DXF, the CAD format floor plans come in (ezdxf).
 
-**Reading** (:func:`read_floor_plan`, ``Room.from_dxf``): the room's outline is the closed
+**Reading** (:func:`read_floor_plan`, :func:`room_from_dxf`): the room's outline is the closed
 polyline (LWPOLYLINE or POLYLINE) on a named layer (default ``room``), the obstacles the
 closed axis-aligned rectangles on another (default ``obstacles``), standing from the floor
 to a given height. Coordinates are converted from the drawing's unit (``mm``, ``cm`` or
@@ -24,6 +24,7 @@ import numpy as np
 
 from simulation import checks
 from simulation.output import write_with
+from simulation.room import SIZE_RANGE, Room
 
 #: the drawing units read and written, in metres per unit
 UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
@@ -119,8 +120,6 @@ def room_from_dxf(
     """The room of the DXF floor plan ``path`` (module docstring): ``height`` m high, its
     obstacles ``obstacle_height`` m high (needed when the layer has any); every other
     keyword is a :class:`~simulation.room.Room` field."""
-    from simulation.room import SIZE_RANGE, Room
-
     h = checks.real("height", height, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="m")
     corners, footprints = read_floor_plan(
         path, layer=layer, unit=unit, obstacle_layer=obstacle_layer

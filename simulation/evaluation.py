@@ -25,10 +25,10 @@ import scipy.fft
 from simulation import checks, degeneracy, statistics, streams
 from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
-from simulation.positioning import locate
 from simulation.received import received_windows
 from simulation.receiver import DEFAULT_PRECISION, HEARD, PRECISIONS, dsp_for
 from simulation.room import Room, as_room
+from simulation.system import System, as_system
 
 #: noise samples held in memory at once when chunking realizations (bytes)
 NOISE_BUDGET_BYTES = 64 * 2**20
@@ -39,8 +39,9 @@ BYTES_PER_RANGE = 8 * 16
 class RangingScene:
     """A layout in a room, prepared for drawing range realizations quickly.
 
-    Holds the noise-free windows (P, M, N), the true distances (P, M), the per-anchor noise
-    σ (M,) of the SNR rule and the receiver DSP of the room's signal (``precision``: see
+    Holds the noise-free windows (P, M, N) of the ``system``'s chirp and receiver (default
+    the paper's, :class:`simulation.System`), the true distances (P, M), the per-anchor
+    noise σ (M,) of the SNR rule and the receiver DSP (``precision``: see
     :class:`~simulation.receiver.Dsp`). ``ranges(rng)`` draws one realization: a range, or
     NaN where the receiver reports none (``detect`` gives the status too).
     """
@@ -51,13 +52,16 @@ class RangingScene:
         anchors,
         nodes=None,
         *,
+        system=None,
         snr_db: float = DEFAULT_SNR_DB,
         precision: str = DEFAULT_PRECISION,
     ):
         self.room = room = as_room(room)
+        self.system = system = as_system(system)
+        system.check_room(room)
         self.anchors = room.check_anchors(checks.reals("anchors", anchors), min_anchors=1)
         self.nodes = room.grid() if nodes is None else room.check_nodes(nodes)
-        self.chirp, self.receiver = room.signal.chirp, room.signal.receiver
+        self.chirp, self.receiver = system.chirp, system.receiver
         self.snr_db = check_snr("snr_db", snr_db)
         checks.choice("precision", precision, PRECISIONS)
         n = len(self.nodes) * len(self.anchors) * self.receiver.window
@@ -65,11 +69,12 @@ class RangingScene:
         c = room.speed_of_sound
         # the shoebox's image set, computed once for the paths and the noise rule
         images = ImageSet.for_room(room) if room.is_shoebox and not room.obstacles else None
-        paths = compute_paths(room, self.anchors, self.nodes, images=images)
+        centre = self.chirp.centre
+        paths = compute_paths(room, self.anchors, self.nodes, images=images, frequency=centre)
         self.distances = paths.length[:, :, 0]  # image 0 is the direct path
         #: (P, M) bool: no wall or obstacle blocks the direct path
         self.line_of_sight = paths.los
-        air = room.air_excess()
+        air = room.air_excess(centre)
         self.dsp = dsp_for(self.chirp, self.receiver, precision)
         #: the windows' and their noise's dtype: single precision for a long window's
         #: single-precision DSP (FFT form), which reads no more; double otherwise
@@ -77,7 +82,7 @@ class RangingScene:
                               else np.float64)  # fmt: skip
         windows = received_windows(paths, c, self.chirp, self.receiver, air)
         self.windows = windows.astype(self.dtype, copy=False)
-        self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images)
+        self.noise_sigma = noise_sigma(room, self.anchors, snr_db, images=images, system=system)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -90,7 +95,7 @@ class RangingScene:
         detection threshold set from ``sigma`` (M,) (default the scene's noise σ)."""
         sigma = self.noise_sigma if sigma is None else sigma
         c = self.room.speed_of_sound
-        return self.dsp.detect(windows, c, sigma, self.room.signal.delays, self.distances / c)
+        return self.dsp.detect(windows, c, sigma, self.system.delays, self.distances / c)
 
     def _to_ranges(self, windows: np.ndarray) -> np.ndarray:
         return self.detect(windows)[0]
@@ -137,10 +142,11 @@ def simulate_ranges(
     rng: np.random.Generator | None = None,
     snr_db: float = DEFAULT_SNR_DB,
     precision: str = DEFAULT_PRECISION,
+    system=None,
 ) -> np.ndarray:
     """(P, M) range estimates in metres from the full simulation, one realization, with the
-    room's signal (``room.signal``); NaN where the receiver hears no chirp or the time of
-    flight lies beyond the signal's reach (:mod:`simulation.receiver`).
+    ``system``'s chirp and receiver (default the paper's); NaN where the receiver hears no
+    chirp or the time of flight lies beyond the signal's reach (:mod:`simulation.receiver`).
 
     ``rng`` (numpy Generator, or a seed) draws the noise (a fresh unseeded one when None).
     Anchors may be anywhere in the room (on the mounting surfaces or not) but at least
@@ -149,7 +155,7 @@ def simulate_ranges(
     rng = streams.rng("rng", rng)
     room = as_room(room)
     checks.distinct("anchors", room.check_anchors(checks.reals("anchors", anchors), 1))
-    scene = RangingScene(room, anchors, nodes, snr_db=snr_db, precision=precision)
+    scene = RangingScene(room, anchors, nodes, system=system, snr_db=snr_db, precision=precision)
     return scene.ranges(rng, noise=noise)
 
 
@@ -202,6 +208,7 @@ class Evaluation:
     range_status: np.ndarray = field(default=None, repr=False)
     fix_status: np.ndarray = field(default=None, repr=False)
     line_of_sight: np.ndarray = field(default=None, repr=False)
+    system: System = field(default_factory=System, repr=False)
 
     def __post_init__(self) -> None:
         if self.range_status is None:  # built by hand: every range a range
@@ -300,6 +307,7 @@ class Evaluation:
         fixed = bool(np.any(np.isfinite(self.errors)))
         d = {
             "room": self.room.to_dict(),
+            "system": self.system.to_dict(),
             "anchors": self.anchors.tolist(),
             "nodes": self.nodes.tolist(),
             "realizations": self.realizations,
@@ -384,8 +392,7 @@ def evaluate_layout(
     *,
     noise: bool = True,
     snr_db: float = DEFAULT_SNR_DB,
-    bounded: bool = False,
-    max_iter: int = 100,
+    system=None,
     chunk: int | None = None,
     precision: str = DEFAULT_PRECISION,
     workers: int | None = None,
@@ -397,8 +404,9 @@ def evaluate_layout(
     apart; nodes (P, 3), inside the room, default to ``room.grid()``. Collinear anchors
     give fixes flagged unconverged; ``Evaluation.geometry`` names the geometry.
     ``chunk`` realizations are processed at a time (default: as many as fit in
-    :data:`NOISE_BUDGET_BYTES` of noise); the result does not depend on it. ``bounded``
-    keeps the position estimates inside the room. ``precision`` is the receiver DSP's
+    :data:`NOISE_BUDGET_BYTES` of noise); the result does not depend on it. ``system``
+    (:class:`simulation.System`, a preset's name or None: the paper's) is the chirp, the
+    receiver and the positioning simulated. ``precision`` is the receiver DSP's
     (default float32, :data:`~simulation.receiver.DEFAULT_PRECISION`; "float64" gives
     the reference chain's index exactly, see :class:`~simulation.receiver.Dsp`). ``workers``
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
@@ -414,8 +422,7 @@ def evaluate_layout(
     realizations = checks.count("realizations", realizations, low=1)
     seed = streams.entropy("rng", rng)
     noise = checks.flag("noise", noise)
-    bounded = checks.flag("bounded", bounded)
-    max_iter = checks.count("max_iter", max_iter, low=1, high=100_000)
+    system = as_system(system)
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
     _check_workers(workers)
@@ -426,12 +433,9 @@ def evaluate_layout(
         value=realizations,
         hint=f"{n_nodes} nodes x {len(anchors)} anchors per realization; use fewer",
     )
-    scene = RangingScene(room, anchors, nodes, snr_db=snr_db, precision=precision)
+    scene = RangingScene(room, anchors, nodes, system=system, snr_db=snr_db, precision=precision)
     ranges, status = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
-    region = (np.zeros(3), np.asarray(room.size, dtype=float))
-    fix = locate(
-        anchors, ranges, region=region, bounded=bounded, max_iter=max_iter, full_output=True
-    )
+    fix = system.positioning.locate(room, anchors, ranges, full_output=True)
     errors = statistics.euclidean_errors(fix.x, scene.nodes)
     return Evaluation(
         anchors=anchors,
@@ -448,4 +452,5 @@ def evaluate_layout(
         range_status=status,
         fix_status=fix.status,
         line_of_sight=scene.line_of_sight,
+        system=system,
     )

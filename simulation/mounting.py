@@ -179,21 +179,27 @@ def _obstacle_surfaces(room) -> list[tuple[MountingSurface, int]]:
     return out
 
 
+def _check_room(room) -> None:
+    """ValueError unless ``room`` is a room (this module serves :mod:`simulation.room`, so
+    it does not import it)."""
+    if type(room).__name__ != "Room" or not hasattr(room, "mounting"):
+        raise ValueError(
+            f"room: must be a simulation.Room (e.g. Room.techtile(), Room.from_toml(path)), "
+            f"got {type(room).__name__}"
+        )
+
+
 def face_obstacles(room) -> dict:
     """{surface name: the obstacle it is a face of} for the faces of the room's mountable
     obstacles among :func:`mounting_surfaces`."""
-    from simulation.room import as_room
-
-    room = as_room(room)
+    _check_room(room)
     return {s.name: room.obstacles[k] for s, k in _obstacle_surfaces(room)}
 
 
 def mounting_surfaces(room) -> tuple[MountingSurface, ...]:
     """The room's mounting surfaces: ``room.mounting`` in its order, then the faces of its
     mountable obstacles (module docstring)."""
-    from simulation.room import as_room
-
-    room = as_room(room)
+    _check_room(room)
     if room.is_shoebox:
         base = [_shoebox_surface(room, n) for n in room.mounting]
     else:

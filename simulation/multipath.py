@@ -9,10 +9,10 @@ at q has length d = ‖p − q‖ and amplitude
 
 with β = √(1 − α) the reflection amplitude of each wall hit (for n > 0 the path hits the
 plane at L ⌈n/2⌉ times and the plane at 0 ⌊n/2⌋ times, mirrored for n < 0), a the air
-attenuation coefficient (``Room.air_reference``: the constant one, or ISO 9613-1 at the
-chirp's centre frequency, whose variation across the band :mod:`simulation.received`
-applies) and g(θ) = ½(1 + cos θ) the cardioid of the real speaker aimed at
-the room centroid. θ is measured for the ray as it leaves the real speaker: the direction
+attenuation coefficient (the constant one, or ISO 9613-1 at the chirp's centre frequency,
+whose variation across the band :mod:`simulation.synthesis` applies) and
+g(θ) = ½(1 + cos θ) the cardioid of the real speaker aimed at the room centroid. θ is
+measured for the ray as it leaves the real speaker: the direction
 image → node, mirrored back through the reflections, i.e. with the sign of each component
 flipped for every axis that is reflected an odd number of times. The node is
 omnidirectional. This is the convention of pyroomacoustics' shoebox ISM
@@ -131,6 +131,10 @@ class Paths:
         return self.length / speed_of_sound
 
 
+#: the paper's chirp's centre frequency (Hz): where the air's attenuation is taken by default
+REFERENCE_FREQUENCY = 35e3
+
+
 def compute_paths(
     room: Room,
     anchors,
@@ -138,6 +142,7 @@ def compute_paths(
     images: ImageSet | None = None,
     aim_at=None,
     directivity: str = "cardioid",
+    frequency: float = REFERENCE_FREQUENCY,
 ) -> Paths:
     """Image-source paths from anchors (M, 3) to nodes (P, 3), vectorized over P × M × I.
 
@@ -145,7 +150,8 @@ def compute_paths(
     ``directivity`` "omni" makes the speakers omnidirectional (the peer simulator's
     general rooms have no speaker directivity). A node exactly on an image (d = 0) is not
     physical; such paths get A = 0. A polygonal room or one with obstacles goes through
-    :mod:`simulation.polyhedral` (``images`` is then not used).
+    :mod:`simulation.polyhedral` (``images`` is then not used). ``frequency`` (Hz) is where
+    the air's attenuation is taken (the chirp's centre; default the paper's 35 kHz).
     """
     room = as_room(room)
     a = checks.reals("anchors", anchors)
@@ -156,8 +162,9 @@ def compute_paths(
         raise ValueError(f"nodes: expected shape (P, 3), got {p.shape}")
     checks.choice("directivity", directivity, ("cardioid", "omni"))
     aim = aim_vectors(a, room.centroid if aim_at is None else np.asarray(aim_at, float))  # (M,3)
+    air = float(room.air_coefficient(checks.real("frequency", frequency, low=0.0, unit="Hz")))
     if not room.is_shoebox or room.obstacles:
-        return _traced_paths(room, a, p, aim, directivity)
+        return _traced_paths(room, a, p, aim, directivity, air)
     images = ImageSet.for_room(room) if images is None else images
     if not isinstance(images, ImageSet):
         raise ValueError(f"images: must be an ImageSet or None, got {checks.describe(images)}")
@@ -176,11 +183,11 @@ def compute_paths(
     ok = d > 0
     safe = np.where(ok, d, 1.0)
     gain = cardioid(np.clip(proj / safe, -1.0, 1.0)) if directivity == "cardioid" else 1.0
-    amp = images.reflection * gain * np.exp(-0.5 * room.air_reference * d) / (4 * np.pi * safe)
+    amp = images.reflection * gain * np.exp(-0.5 * air * d) / (4 * np.pi * safe)
     return Paths(length=d, amplitude=np.where(ok, amp, 0.0))
 
 
-def _traced_paths(room: Room, a: np.ndarray, p: np.ndarray, aim: np.ndarray, directivity) -> Paths:
+def _traced_paths(room: Room, a, p, aim, directivity, air: float) -> Paths:
     """:func:`compute_paths` of a room that is not a plain shoebox (module docstring)."""
     from simulation.polyhedral import paths
 
@@ -193,5 +200,5 @@ def _traced_paths(room: Room, a: np.ndarray, p: np.ndarray, aim: np.ndarray, dir
     gain = cardioid(np.clip(cos, -1.0, 1.0)) if directivity == "cardioid" else 1.0
     ok = valid & (d > 0)
     safe = np.where(ok, d, 1.0)
-    amp = beta * gain * np.exp(-0.5 * room.air_reference * safe) / (4 * np.pi * safe)
+    amp = beta * gain * np.exp(-0.5 * air * safe) / (4 * np.pi * safe)
     return Paths(length=d, amplitude=np.where(ok, amp, 0.0), line_of_sight=los)

@@ -22,6 +22,7 @@ from simulation import checks
 from simulation.multipath import ImageSet, compute_paths
 from simulation.received import received_windows
 from simulation.room import Room, as_room
+from simulation.system import as_system
 
 #: default SNR at the grid node closest to each anchor, dB (paper §V-A)
 DEFAULT_SNR_DB = 30.0
@@ -52,19 +53,23 @@ def noise_sigma(
     snr_db: float = DEFAULT_SNR_DB,
     grid_shape=(9, 6, 5),
     images: ImageSet | None = None,
+    system=None,
 ) -> np.ndarray:
     """(M,) noise standard deviation σ_j per anchor (units of the received signal).
 
-    σ_j² = mean(y_ref,j²) / 10^(snr_db/10), y_ref,j the noise-free window (the room's
-    signal) of anchor j at its :func:`reference_nodes` node.
+    σ_j² = mean(y_ref,j²) / 10^(snr_db/10), y_ref,j the noise-free window (the chirp and
+    receiver of ``system``, default the paper's) of anchor j at its :func:`reference_nodes`
+    node.
     """
     snr_db = check_snr("snr_db", snr_db)
     room = as_room(room)
     a = checks.points("anchors", anchors)
     ref = reference_nodes(room, a, grid_shape)
-    paths = compute_paths(room, a, ref, images=images)  # (M nodes, M anchors, I)
-    sig = room.signal
-    w = received_windows(paths, room.speed_of_sound, sig.chirp, sig.receiver, room.air_excess())
+    system = as_system(system)
+    ch = system.chirp
+    paths = compute_paths(room, a, ref, images=images, frequency=ch.centre)  # (M, M, I)
+    w = received_windows(paths, room.speed_of_sound, ch, system.receiver,
+                         room.air_excess(ch.centre))  # fmt: skip
     j = np.arange(len(a))
     own = w[j, j]  # (M, N): node j with anchor j
     power = np.mean(own * own, axis=-1)

@@ -53,11 +53,9 @@ RANGE_FLOOR = -1.0
 RANGE_CEILING = 1e5
 #: the fewest heard anchors that fix a node with missing ranges
 MIN_HEARD = 4
-#: How the planner and the report solve positions (docs/model.md, "Positioning"): as an
-#: installed system that knows its room would, started inside the room's box with every
-#: iterate kept inside it. :func:`locate` and ``evaluate_layout`` keep the paper's
-#: unbounded least squares as their default.
-KEEP_IN_ROOM = True
+#: the positioning methods (:class:`simulation.Positioning`): least squares on every heard
+#: range (the paper's)
+METHODS = ("ls",)
 
 
 @dataclass(frozen=True)

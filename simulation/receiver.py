@@ -84,6 +84,10 @@ from simulation import checks
 from simulation.chirp import Chirp
 from simulation.positioning import RANGE_FLOOR  # the lowest range positioning accepts
 
+#: the shortest overlap (s) of a path's chirp with a window longer than it that the
+#: receiver is taken to see: the paper's 1 ms slice (:mod:`simulation.system`, "Reach")
+MIN_OVERLAP = 1e-3
+
 #: accepted false-alarm probability per window of the detection (exclusive of 0)
 FALSE_ALARM_RANGE = (0.0, 0.5)
 
@@ -197,6 +201,16 @@ class Receiver:
         )
 
 
+def delay_span(chirp: Chirp, receiver: Receiver) -> tuple[float, float]:
+    """(τ_min, τ_max) s: the times of flight whose chirp the window holds at least
+    D = min(W, T, :data:`MIN_OVERLAP`) of, W = (N − 1)/fs the window's span
+    (:mod:`simulation.system`, "Reach"): τ_min = max(0, t_wake + min(0, D − T)),
+    τ_max = t_wake + max(0, W − D)."""
+    span = (receiver.window - 1) / receiver.fs
+    t, D = receiver.t_wake, min(span, chirp.duration, MIN_OVERLAP)
+    return max(0.0, t + min(0.0, D - chirp.duration)), t + max(0.0, span - D)
+
+
 def snap_to_peak(curve: np.ndarray, index: np.ndarray, width: int = 32) -> np.ndarray:
     """Move each index to the nearest local maximum of ``curve`` (B, n), vectorized.
 
@@ -288,11 +302,10 @@ def sidelobe_profile(chirp: Chirp, receiver: Receiver) -> tuple[np.ndarray, np.n
     path that overlaps the window by a 1 ms slice of the chirp has sidelobes of about a
     fifth of its peak (a rectangular slice's −13 dB); a path the window holds whole has
     lower ones."""
-    from simulation.received import synthesize  # a runtime import: received imports this
-    from simulation.signal import Signal
+    from simulation.synthesis import synthesize
 
     rx = dataclasses.replace(receiver, pick="paper", false_alarm=None)
-    lo, hi = Signal(chirp, rx).delays
+    lo, hi = delay_span(chirp, rx)
     taus = np.linspace(lo, hi, 33)
     windows = synthesize(taus[:, None], np.ones((len(taus), 1)), chirp, rx)
     levels = np.zeros(len(taus))

@@ -14,7 +14,7 @@ import json
 import math
 import tomllib
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +23,6 @@ import numpy as np
 from simulation import air, checks, floorplan
 from simulation.output import write_file
 from simulation.regions import in_boxes
-from simulation.signal import Signal, as_signal
 
 #: The six planes of a shoebox: name -> (axis, side), side 0 is the plane at 0, 1 at L.
 SURFACES: dict[str, tuple[int, int]] = {
@@ -89,8 +88,6 @@ class Room:
         ``humidity`` and ``pressure`` (:mod:`simulation.air`).
     humidity : relative humidity of the air in %, in [0, 100] (ISO 9613-1 only).
     pressure : air pressure in kPa, in [50, 110] (ISO 9613-1 only).
-    signal : the chirp and receiver (:class:`simulation.Signal`, or a mapping of its
-        keys; default the paper's design); its reach bounds the ranges the receiver sees.
     mounting : the surfaces anchors may be mounted on (default: south, north and ceiling
         in a shoebox, every wall and the ceiling in a polygonal room); the faces of
         mountable obstacles come on top.
@@ -128,7 +125,6 @@ class Room:
     zone_names: tuple[str, ...] = ()
     humidity: float = 50.0
     pressure: float = air.REFERENCE_PRESSURE
-    signal: Signal = field(default_factory=Signal)
     corners: tuple | None = None
     wall_names: tuple[str, ...] = ()
     obstacles: tuple = ()
@@ -151,7 +147,6 @@ class Room:
         order = checks.count("obstacle_order", order, low=0, high=self.max_order)
         object.__setattr__(self, "obstacle_order", order)
         self._init_air()
-        object.__setattr__(self, "signal", as_signal(self.signal))
         if not isinstance(self.name, str):
             raise ValueError(f"name: must be a string, got {checks.describe(self.name)}")
         half = min(size) / 2
@@ -162,21 +157,6 @@ class Room:
             self, "obstacles", floorplan.obstacles_from(self.obstacles, size, self.corners)
         )
         self._init_boxes(size)
-        self._check_window()
-
-    def _check_window(self) -> None:
-        """A window that closes after the chirp's end plus the longest flight in the room
-        (its diagonal over c) holds nothing but noise after that: refuse it."""
-        sig = self.signal
-        latest = sig.chirp.duration + self.diagonal / self.speed_of_sound
-        if sig.window_end > latest + 1.0 / sig.receiver.fs:
-            allowed = int((latest - sig.receiver.t_wake) * sig.receiver.fs) + 1
-            raise ValueError(
-                f"window: {sig.receiver.window} samples from t_wake = "
-                f"{sig.receiver.t_wake * 1e3:g} ms close {sig.window_end * 1e3:g} ms after the "
-                f"chirp starts, after its end plus the room's longest flight "
-                f"({latest * 1e3:.4g} ms); allowed: at most {max(allowed, 0)} samples"
-            )
 
     def _init_geometry(self) -> tuple[float, float, float]:
         """Check the size, or normalize the floor plan and derive the size from it."""
@@ -335,16 +315,6 @@ class Room:
         return cls(size=size, corners=c.tolist(), **kw)
 
     @classmethod
-    def from_dxf(cls, path, height: float, **kw) -> Room:
-        """The room of a DXF floor plan (:mod:`simulation.dxf`): the closed polyline on
-        ``layer`` (default "room") in ``unit`` ("mm", "cm" or "m"), ``height`` m high, with
-        the rectangles on ``obstacle_layer`` (default "obstacles") as obstacles
-        ``obstacle_height`` m high; every other keyword is a :class:`Room` field."""
-        from simulation.dxf import room_from_dxf
-
-        return room_from_dxf(path, height, **kw)
-
-    @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> Room:
         """Build a room from :meth:`to_dict` output (unknown keys raise ``ValueError``)."""
         checks.mapping("room", d, "a mapping of Room fields")
@@ -362,7 +332,11 @@ class Room:
         if isinstance(kw.get("mounting"), list):
             kw["mounting"] = tuple(kw["mounting"])
         if "signal" in kw:
-            kw["signal"] = as_signal(kw["signal"])
+            raise ValueError(
+                "room: a [signal] table belongs to the system now: move its chirp keys (f0, f1, "
+                "duration) to [system.signal] and the receiver's to [system.receiver] "
+                "(simulation.System; CHANGELOG)"
+            )
         if "corners" in kw or "height" in kw:
             if "corners" not in kw or "height" not in kw:
                 raise ValueError("room: a polygonal room needs both 'corners' and 'height'")
@@ -376,7 +350,9 @@ class Room:
         """Read a room from a TOML file with the keys of :meth:`to_dict`.
 
         Keep-outs and zones are arrays of tables, ``[[keepout]]`` and ``[[zone]]``, each
-        with ``min = [x, y, z]``, ``max = [x, y, z]`` and an optional ``name``. Every
+        with ``min = [x, y, z]``, ``max = [x, y, z]`` and an optional ``name``. A
+        ``[system]`` table is the positioning system's (:meth:`simulation.System.from_toml`
+        reads it) and not part of the room. Every
         problem (missing, unreadable, empty or invalid file, a bad key or value) raises
         ``ValueError`` naming the file.
         """
@@ -388,6 +364,7 @@ class Room:
             raise ValueError(f"room file {p}: cannot read it ({exc.strerror})") from None
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise ValueError(f"room file {p}: not valid TOML ({exc})") from None
+        data.pop("system", None)  # the system's table, read by simulation.System.from_toml
         if not data:
             raise ValueError(
                 f"room file {p}: empty; give at least size = [Lx, Ly, Lz] in metres "
@@ -433,9 +410,6 @@ class Room:
             d["humidity"] = self.humidity
         if self.air_absorption == air.ISO9613 or self.pressure != air.REFERENCE_PRESSURE:
             d["pressure"] = self.pressure
-        signal = self.signal.to_dict()
-        if signal:  # the paper's design is the default: a plain room's dictionary is unchanged
-            d["signal"] = signal
         if self.obstacles:
             d["obstacles"] = [ob.to_dict() for ob in self.obstacles]
         if self.obstacle_order != self.max_order:
@@ -453,12 +427,9 @@ class Room:
             "zone": d.pop("zones", []),
             "obstacle": d.pop("obstacles", []),
         }
-        signal = d.pop("signal", {})
         for k, v in d.items():
             lines.append(f"{k} = {_toml_value(v)}")
-        for name, table in (("absorption", absorption), ("signal", signal)):
-            if table:
-                lines += ["", f"[{name}]"] + [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+        lines += ["", "[absorption]"] + [f"{k} = {_toml_value(v)}" for k, v in absorption.items()]
         for key, items in tables.items():
             for item in items:
                 lines += ["", f"[[{key}]]"] + [f"{k} = {_toml_value(v)}" for k, v in item.items()]
@@ -475,17 +446,6 @@ class Room:
         if self.sound_speed is not None:
             return float(self.sound_speed)
         return 331.3 * math.sqrt(1.0 + self.temperature / 273.15)
-
-    @property
-    def reach(self) -> float:
-        """The longest range (m) the signal's window sees at this room's speed of sound
-        (:meth:`simulation.Signal.reach`)."""
-        return self.signal.reach(self.speed_of_sound)
-
-    @property
-    def near_limit(self) -> float:
-        """The shortest range (m) the signal's window sees (0 for the paper's design)."""
-        return self.signal.near_limit(self.speed_of_sound)
 
     @property
     def diagonal(self) -> float:
@@ -543,19 +503,13 @@ class Room:
         db = air.iso9613_db_per_m(f, self.temperature, self.humidity, self.pressure)
         return air.energy_coefficient(db)
 
-    @property
-    def air_reference(self) -> float:
-        """m at the chirp's centre frequency (1/m): the attenuation in the path amplitudes
-        (:mod:`simulation.multipath`); the constant coefficient when there is one."""
-        centre = 0.5 * (self.signal.chirp.f0 + self.signal.chirp.f1)
-        return float(self.air_coefficient(centre))
-
-    def air_excess(self):
-        """None for a constant coefficient, else the function f ↦ m(f) − m(f_centre) (1/m)
-        that the received windows apply across the chirp's band (:mod:`simulation.received`)."""
+    def air_excess(self, frequency: float):
+        """None for a constant coefficient, else the function f ↦ m(f) − m(``frequency``)
+        (1/m) that the received windows apply across the chirp's band around its centre
+        ``frequency`` (Hz; :mod:`simulation.synthesis`)."""
         if self.air_absorption != air.ISO9613:
             return None
-        ref = self.air_reference
+        ref = float(self.air_coefficient(frequency))
         return lambda f: self.air_coefficient(f) - ref
 
     @property

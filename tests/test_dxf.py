@@ -8,7 +8,7 @@ import pytest
 
 from placement.cli import main
 from simulation import Room
-from simulation.dxf import read_anchors, write_plan
+from simulation.dxf import read_anchors, room_from_dxf, write_plan
 from simulation.evaluation import simulate_ranges
 
 L_CORNERS = [[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]]
@@ -30,7 +30,7 @@ def test_a_rectangle_in_millimetres_is_the_shoebox_in_metres(tmp_path):
     with the same simulated ranges."""
     rect = [(1500, 2500), (9500, 2500), (9500, 6500), (1500, 6500)]
     path = _drawing(tmp_path / "box.dxf", [("room", rect, True)])
-    room = Room.from_dxf(path, 2.4, unit="mm")
+    room = room_from_dxf(path, 2.4, unit="mm")
     box = Room(size=(8.0, 4.0, 2.4), name="box")
     assert room.is_shoebox and room.size == box.size and room.name == "box"
     a = box.corners_layout()
@@ -49,7 +49,7 @@ def test_a_polygon_outline_and_obstacles(tmp_path):
          ("OBSTACLES", [(5, 1), (6, 1), (6, 2), (5, 2)], True)],
         unit_scale=100.0,
     )  # fmt: skip
-    room = Room.from_dxf(path, 3.0, unit="cm", obstacle_height=2.0)
+    room = room_from_dxf(path, 3.0, unit="cm", obstacle_height=2.0)
     assert not room.is_shoebox
     assert np.allclose(room.floor_corners, L_CORNERS)
     boxes = sorted((tuple(o.lo), tuple(o.hi)) for o in room.obstacles)
@@ -73,9 +73,9 @@ def test_a_polygon_outline_and_obstacles(tmp_path):
 def test_bad_floor_plans_are_refused_by_name(tmp_path, polylines, kw, name):
     path = _drawing(tmp_path / "bad.dxf", polylines)
     with pytest.raises(ValueError, match=name):
-        Room.from_dxf(path, 3.0, **kw)
+        room_from_dxf(path, 3.0, **kw)
     with pytest.raises(ValueError, match="height"):
-        Room.from_dxf(_drawing(tmp_path / "ok.dxf", [("room", L_CORNERS, True)]), -1.0)
+        room_from_dxf(_drawing(tmp_path / "ok.dxf", [("room", L_CORNERS, True)]), -1.0)
 
 
 @pytest.mark.parametrize("unit", ["m", "mm"])
@@ -92,7 +92,7 @@ def test_a_written_plan_reads_back(tmp_path, unit):
     assert {"room", "keepouts", "zones", "anchors"} <= layers
     n_keepouts = len(doc.modelspace().query('LWPOLYLINE[layer=="keepouts"]'))
     assert n_keepouts == len(room.keepouts)
-    back = Room.from_dxf(path, room.size[2], unit=unit)
+    back = room_from_dxf(path, room.size[2], unit=unit)
     assert back.size == room.size and back.is_shoebox
 
 

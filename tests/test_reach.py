@@ -16,8 +16,9 @@ from simulation import Chirp, Receiver, Room, Signal, evaluate_layout, simulate_
 from simulation import air as air_model
 from simulation.evaluation import RangingScene
 from simulation.multipath import compute_paths
-from simulation.received import received_windows, synthesize, synthesize_direct
+from simulation.received import received_windows
 from simulation.receiver import HEARD, NOT_HEARD, OUT_OF_REACH, dsp_for
+from simulation.synthesis import synthesize, synthesize_direct
 
 TECHTILE = Room.techtile()
 #: a long chirp whose 1 ms window opens at its last millisecond: reach c·89 ms

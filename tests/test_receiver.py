@@ -8,8 +8,9 @@ from simulation import Chirp, Receiver, Room
 from simulation.evaluation import RangingScene
 from simulation.multipath import compute_paths
 from simulation.noise import noise_sigma
-from simulation.received import received_windows, synthesize, synthesize_direct
+from simulation.received import received_windows
 from simulation.receiver import dsp_for, reference_chain, snap_to_peak
+from simulation.synthesis import synthesize, synthesize_direct
 
 ALL = ("floor", "ceiling", "south", "north", "west", "east")
 ANECHOIC = Room(absorption={k: 1.0 for k in ALL})

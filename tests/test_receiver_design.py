@@ -9,8 +9,9 @@ import pytest
 from simulation import Chirp, Receiver, Room, Signal
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.multipath import compute_paths
-from simulation.received import received_windows, synthesize, synthesize_direct
+from simulation.received import received_windows
 from simulation.receiver import HEARD, OUT_OF_REACH, Dsp, dsp_for, reference_chain
+from simulation.synthesis import synthesize, synthesize_direct
 
 ALL = ("floor", "ceiling", "south", "north", "west", "east")
 CH = Chirp()

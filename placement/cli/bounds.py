@@ -6,9 +6,11 @@ from analysis import bound, error_stats
 from analysis.fim import DEFAULT_SIGMA, check_sigma
 from placement.cli.common import (
     add_room_argument,
+    add_system_arguments,
     describe_room,
     load_layout,
     load_room,
+    load_system,
     output_file,
     write_json,
 )
@@ -29,6 +31,7 @@ def register(sub) -> None:
         "--sigma", type=float, default=DEFAULT_SIGMA, help="range sigma in metres (0.04)"
     )
     p.add_argument("--out", metavar="FILE.json", help="also write the statistics as JSON")
+    add_system_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -38,9 +41,10 @@ def run(args) -> int:
         output_file("--out", args.out)
     check_sigma(args.sigma, "--sigma")
     room = load_room(args.room, args)
+    system = load_system(args, room)
     anchors = room.corners_layout() if args.layout is None else load_layout(args.layout, room)
     nodes = room.grid()
-    values = bound(room, anchors, nodes, args.sigma)
+    values = bound(room, anchors, nodes, args.sigma, system=system)
     stats = error_stats(values)
     print(f"room {room.name}: {describe_room(room)}")
     print(f"{len(anchors)} anchors, {len(nodes)} nodes, range sigma {args.sigma:g} m")
@@ -60,6 +64,7 @@ def run(args) -> int:
             args.out,
             {
                 "room": room.to_dict(),
+                "system": system.to_dict(),
                 "anchors": anchors,
                 "sigma": args.sigma,
                 "peb_definition": "sqrt(tr J^-1), metres",

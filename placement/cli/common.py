@@ -10,18 +10,19 @@ import numpy as np
 
 from placement.serialization import to_jsonable
 from simulation import checks
+from simulation.dxf import room_from_dxf
 from simulation.output import write_file
 from simulation.room import Room
 
 __all__ = [
     "add_room_argument",
-    "add_signal_arguments",
-    "apply_signal",
+    "add_system_arguments",
     "describe_room",
-    "describe_signal",
+    "describe_system",
     "json_text",
     "load_layout",
     "load_room",
+    "load_system",
     "output_dir",
     "output_file",
     "to_jsonable",
@@ -61,7 +62,7 @@ def load_room(path: str | None, args=None) -> Room:
         if height is None:
             raise ValueError(f"--room-height: a DXF floor plan ({path}) needs the room's height, m")
         try:
-            return Room.from_dxf(
+            return room_from_dxf(
                 path,
                 height,
                 unit=getattr(args, "dxf_unit", "m"),
@@ -76,7 +77,8 @@ def load_room(path: str | None, args=None) -> Room:
     return Room.from_toml(path)
 
 
-#: the signal flags and the Signal keys they set (None: the two band edges)
+#: the signal flags and the fields of the system's chirp or receiver they set (None: the
+#: two band edges)
 SIGNAL_FLAGS = {
     "--chirp-duration": "duration",
     "--band": None,
@@ -88,11 +90,18 @@ SIGNAL_FLAGS = {
 }
 
 
-def add_signal_arguments(parser) -> None:
-    """Add the signal-design flags (default: the room file's ``[signal]``, else the
-    paper's design)."""
+def add_system_arguments(parser) -> None:
+    """Add ``--system NAME|FILE`` and the signal flags that change one field of it."""
+    from simulation.system import PRESETS
+
     g = parser.add_argument_group(
-        "signal design (default: the room's [signal] table, else the paper's)"
+        "the positioning system (default: the room file's [system] table, else the paper's)"
+    )
+    g.add_argument(
+        "--system",
+        metavar="NAME|FILE",
+        help=f"a preset ({', '.join(PRESETS)}) or a TOML file with a [system] table "
+        "(its [system.signal], [system.receiver] and [system.positioning] parts)",
     )
     g.add_argument("--chirp-duration", type=float, metavar="S", help="chirp length, s (0.03)")
     g.add_argument(
@@ -118,13 +127,30 @@ def add_signal_arguments(parser) -> None:
     )
 
 
-def apply_signal(args, room: Room) -> Room:
-    """The room with the signal flags given in ``args`` applied to its signal; an error
-    names the flag."""
-    import dataclasses
+def system_choice(value: str | None, room_file: str | None = None):
+    """The system named by ``--system`` (a preset or a TOML file), else the ``[system]``
+    table of the room file, else the paper's; an unknown name lists the presets."""
+    from simulation.system import PRESETS, System
 
-    from simulation.signal import Signal
+    if value is None:
+        if room_file is not None and str(room_file).lower().endswith(".toml"):
+            return System.from_toml(room_file)
+        return System()
+    if value in PRESETS:
+        return System.preset(value)
+    if Path(value).exists() or value.lower().endswith(".toml"):
+        checks.input_file("--system", value)
+        return System.from_toml(value)
+    raise ValueError(
+        f"--system: {value!r} is neither a preset nor a file; the presets: {list(PRESETS)}"
+    )
 
+
+def load_system(args, room: Room | None = None):
+    """The run's system (:func:`system_choice` of ``--system`` and ``--room``) with the
+    signal flags given in ``args`` applied; checked against ``room``; an error names the
+    flag."""
+    system = system_choice(getattr(args, "system", None), getattr(args, "room", None))
     given = {}
     for flag, key in SIGNAL_FLAGS.items():
         value = getattr(args, flag[2:].replace("-", "_"), None)
@@ -134,12 +160,10 @@ def apply_signal(args, room: Room) -> Room:
             given["f0"], given["f1"] = value
         else:
             given[key] = value
-    if not given:
-        return room
-    merged = {**room.signal.to_dict(), **given}
     try:
-        signal = Signal.from_dict(merged)
-        return dataclasses.replace(room, signal=signal)  # the room checks the window too
+        system = system.with_signal(**given)
+        if room is not None:
+            system.check_room(room)
     except ValueError as exc:
         key, _, text = str(exc).partition(":")
         if key == "chirp" and "fs" in given and "f0" not in given:
@@ -149,7 +173,10 @@ def apply_signal(args, room: Room) -> Room:
             for f, k in SIGNAL_FLAGS.items()
             if k == key or (k is None and key in ("f0", "f1", "chirp"))
         ]
+        if not flags and not given:
+            raise
         raise ValueError(f"{flags[0] if flags else 'signal'}: {text.strip()}") from None
+    return system
 
 
 def describe_room(room: Room) -> str:
@@ -165,20 +192,23 @@ def describe_room(room: Room) -> str:
     return text
 
 
-def describe_signal(room: Room) -> str:
-    """One line: the chirp, the window, the detection and the reach."""
-    sig = room.signal
-    ch, rx = sig.chirp, sig.receiver
+def describe_system(room: Room, system) -> str:
+    """One line: the system's name, the chirp, the window, the detection, the reach and the
+    positioning."""
+    ch, rx = system.chirp, system.receiver
     detect = (
         "no detection threshold"
         if rx.false_alarm is None
         else f"detection at false alarm <= {rx.false_alarm:g}"
     )
-    near = f", nothing nearer than {room.near_limit:.2f} m" if room.near_limit > 0 else ""
+    c = room.speed_of_sound
+    near = system.near_limit(c)
+    near = f", nothing nearer than {near:.2f} m" if near > 0 else ""
     return (
-        f"signal: chirp {ch.duration * 1e3:g} ms {ch.f0 / 1e3:g}-{ch.f1 / 1e3:g} kHz, window "
-        f"{rx.window} samples ({sig.window_span * 1e3:.3g} ms) from {rx.t_wake * 1e3:g} ms at "
-        f"{rx.fs / 1e3:g} kHz, {rx.pick} pick, {detect}: reach {room.reach:.2f} m{near}"
+        f"system {system.name}: chirp {ch.duration * 1e3:g} ms {ch.f0 / 1e3:g}-{ch.f1 / 1e3:g} "
+        f"kHz, window {rx.window} samples ({system.window_span * 1e3:.3g} ms) from "
+        f"{rx.t_wake * 1e3:g} ms at {rx.fs / 1e3:g} kHz, {rx.pick} pick, {detect}: reach "
+        f"{system.reach(c):.2f} m{near}; {system.positioning.describe()}"
     )
 
 
@@ -269,3 +299,15 @@ def load_plan(result_dir):
         raise ValueError(
             msg if msg.startswith("RESULT_DIR") else f"RESULT_DIR {result_dir}: {msg}"
         ) from None
+
+
+def plan_system(result_dir, value: str | None = None):
+    """The system of a result folder (its ``system``), or the one ``--system`` names."""
+    from analysis.report_data import load_results, system_of
+
+    if value is not None:
+        return system_choice(value)
+    try:
+        return system_of(load_results(result_dir))
+    except (ValueError, FileNotFoundError) as exc:
+        raise ValueError(f"RESULT_DIR {result_dir}: {exc}") from None

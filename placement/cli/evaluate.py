@@ -7,13 +7,13 @@ from pathlib import Path
 
 from placement.cli.common import (
     add_room_argument,
-    add_signal_arguments,
-    apply_signal,
+    add_system_arguments,
     availability_note,
     describe_room,
-    describe_signal,
+    describe_system,
     load_layout,
     load_room,
+    load_system,
     output_dir,
     write_json,
 )
@@ -40,7 +40,7 @@ def register(sub) -> None:
         "--snr", type=float, default=30.0, help="SNR in dB at each anchor's closest node (30)"
     )
     p.add_argument("--out", metavar="DIR", required=True, help="output folder")
-    add_signal_arguments(p)
+    add_system_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -49,13 +49,13 @@ def run(args) -> int:
     from simulation import evaluate_layout
     from simulation.evaluation import BYTES_PER_RANGE
     from simulation.noise import check_snr
-    from simulation.positioning import KEEP_IN_ROOM
 
     out_dir = output_dir("--out", args.out)
     checks.count("--realizations", args.realizations, low=1)
     checks.count("--seed", args.seed, low=0)
     check_snr("--snr", args.snr)
-    room = apply_signal(args, load_room(args.room, args))
+    room = load_room(args.room, args)
+    system = load_system(args, room)
     anchors = load_layout(args.layout, room)
     checks.check_size(
         "--realizations",
@@ -65,7 +65,7 @@ def run(args) -> int:
     )
     t0 = time.perf_counter()
     ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed,
-                         snr_db=args.snr, bounded=KEEP_IN_ROOM)  # fmt: skip
+                         snr_db=args.snr, system=system)  # fmt: skip
     seconds = time.perf_counter() - t0
     data = ev.to_dict()
     data["seconds"] = seconds
@@ -76,7 +76,7 @@ def run(args) -> int:
         f"{len(anchors)} anchors, {len(ev.nodes)} nodes, {ev.realizations} realization(s), "
         f"seed {args.seed}, SNR {ev.snr_db:g} dB, {seconds:.1f} s"
     )
-    print(describe_signal(room))
+    print(describe_system(room, system))
     print("Euclidean position error in metres over the fixes of all nodes and realizations:")
     print(
         f"  std {st['std']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}  "

@@ -5,7 +5,14 @@ from __future__ import annotations
 import math
 
 from analysis.fim import DEFAULT_SIGMA
-from placement.cli.common import add_room_argument, load_layout, load_room, output_file
+from placement.cli.common import (
+    add_room_argument,
+    add_system_arguments,
+    load_layout,
+    load_room,
+    load_system,
+    output_file,
+)
 from simulation import checks
 
 #: limits that keep a map's memory and time bounded
@@ -43,6 +50,7 @@ def register(sub) -> None:
     p.add_argument("--dpi", type=float, default=100, help="resolution (100)")
     p.add_argument("--size", type=float, nargs=2, metavar=("W", "H"), help="figure size in inches")
     p.add_argument("--out", metavar="FILE.png", required=True, help="output image")
+    add_system_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -61,6 +69,7 @@ def run(args) -> int:
         for v in args.size:
             checks.real("--size", v, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="inches")
     room = load_room(args.room, args)
+    system = load_system(args, room)
     planes = [("--height", 2, z) for z in args.height or ()]
     planes += [("--x-cut", 0, x) for x in args.x_cut] + [("--y-cut", 1, y) for y in args.y_cut]
     if len(planes) > MAX_PANELS:
@@ -95,6 +104,7 @@ def run(args) -> int:
         vmax=args.vmax,
         figsize=None if args.size is None else tuple(args.size),
         dpi=args.dpi,
+        system=system,
     )
     w, h = (round(v * args.dpi) for v in fig.get_size_inches())
     if w * h > MAX_PIXELS:

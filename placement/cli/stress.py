@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import time
 
-from placement.cli.common import load_plan, output_file
+from placement.cli.common import load_plan, output_file, plan_system
 from simulation import checks
 from simulation.output import write_file
 
@@ -25,6 +25,11 @@ def register(sub) -> None:
     p.add_argument("--draws", type=int, default=10, help="mounting draws per tolerance (10)")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument("--out", metavar="FILE.json", help="output file (RESULT_DIR/stress.json)")
+    p.add_argument(
+        "--system",
+        metavar="NAME|FILE",
+        help="the system to stress (a preset or a TOML file; default: the plan's)",
+    )
     p.set_defaults(func=run)
 
 
@@ -38,8 +43,11 @@ def run(args) -> int:
     checks.count("--draws", args.draws, low=1, high=10_000)
     checks.count("--seed", args.seed, low=0)
     room, anchors = load_plan(result_dir)
+    system = plan_system(result_dir, args.system)
     t0 = time.perf_counter()
-    res = stress(room, anchors, realizations=args.realizations, draws=args.draws, rng=args.seed)
+    print(f"system {system.describe()}")
+    res = stress(room, anchors, realizations=args.realizations, draws=args.draws, rng=args.seed,
+                 system=system)  # fmt: skip
     _print(res)
     write_file(out, json.dumps(res.to_dict(), indent=1) + "\n")
     print(f"wrote {out} ({time.perf_counter() - t0:.0f} s)")

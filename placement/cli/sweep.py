@@ -10,11 +10,11 @@ import time
 from placement.cli.common import (
     add_effort_argument,
     add_room_argument,
-    add_signal_arguments,
-    apply_signal,
-    describe_signal,
+    add_system_arguments,
+    describe_system,
     json_text,
     load_room,
+    load_system,
     number,
     output_dir,
     write_json,
@@ -67,7 +67,7 @@ def register(sub) -> None:
         choices=("paper", "first-path"),
         help="the picks of the receiver designs (with --windows; default: the room's pick)",
     )
-    add_signal_arguments(p)
+    add_system_arguments(p)
     p.set_defaults(func=run, scheduler=None, eval_timeout=None)
 
 
@@ -88,25 +88,25 @@ def parse_counts(text: str) -> list[int]:
     raise ValueError(f"--anchors: expected a range like 4-10 or a list like 4,6,8, got {text!r}")
 
 
-def designs(args, room) -> dict[str, object]:
-    """The rooms of the receiver designs of ``--windows`` × ``--picks`` by label ("20ms-
-    first-path"); {"": room} without ``--windows``."""
-    import dataclasses
-
-    from simulation.signal import closing_window
+def designs(args, room, system) -> dict[str, object]:
+    """The systems of the receiver designs of ``--windows`` × ``--picks`` by label ("20ms-
+    first-path"), each ``system`` with that window and pick; {"": system} without
+    ``--windows``."""
+    from simulation.system import closing_window
 
     if args.windows is None:
         if args.picks is not None:
             raise ValueError("--picks: sweeps receiver designs with --windows; give both")
-        return {"": room}
-    picks = args.picks or [room.signal.receiver.pick]
+        return {"": system}
+    picks = args.picks or [system.receiver.pick]
     out = {}
     for ms in args.windows:
         checks.real("--windows", ms, low=0.0, low_open=True, unit="ms")
         for pick in picks:
             try:
-                sig = closing_window(room.signal, ms * 1e-3, pick)
-                out[f"{ms:g}ms-{pick}"] = dataclasses.replace(room, signal=sig)
+                design = closing_window(system, ms * 1e-3, pick)
+                design.check_room(room)
+                out[f"{ms:g}ms-{pick}"] = design
             except ValueError as exc:
                 raise ValueError(f"--windows: {ms:g} ms: {exc}") from None
     return out
@@ -115,16 +115,17 @@ def designs(args, room) -> dict[str, object]:
 def run(args) -> int:
     """Run ``anchorplan sweep`` on parsed ``args``; the exit status (0: done)."""
     out = output_dir("--out", args.out)
-    room = apply_signal(args, load_room(args.room, args))
-    rooms = designs(args, room)
-    if list(rooms) == [""]:
-        _run_one(args, room, out)
+    room = load_room(args.room, args)
+    system = load_system(args, room)
+    systems = designs(args, room, system)
+    if list(systems) == [""]:
+        _run_one(args, room, system, out)
         return 0
     summary = []
-    for label, r in rooms.items():
+    for label, s in systems.items():
         print(f"receiver design {label}", flush=True)
-        res = _run_one(args, r, out / label)
-        rx = r.signal.receiver
+        res = _run_one(args, room, s, out / label)
+        rx = s.receiver
         summary += [
             {"design": label, "window": rx.window, "t_wake": rx.t_wake, "pick": rx.pick,
              "samples_per_fix": rx.window * row.M, **{k: getattr(row, k) for k in
@@ -142,8 +143,8 @@ def run(args) -> int:
     return 0
 
 
-def _run_one(args, room, out):
-    """One sweep of M for one room (and its signal design) into ``out``; its result."""
+def _run_one(args, room, system, out):
+    """One sweep of M for one room and system into ``out``; its result."""
     from analysis.figures import png_bytes, sweep_curves
     from analysis.paper import TABLE1
     from placement.anchor_sweep import sweep
@@ -163,7 +164,7 @@ def _run_one(args, room, out):
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
         print(f"sweeping M = {counts} in {room.name}, seed {args.seed}", flush=True)
-        print(describe_signal(room), flush=True)
+        print(describe_system(room, system), flush=True)
 
         def report(M, row):
             print(
@@ -176,6 +177,7 @@ def _run_one(args, room, out):
         res = sweep(
             room,
             counts,
+            system=system,
             target_p95=args.target_p95,
             target_availability=args.target_availability,
             rng=args.seed,
