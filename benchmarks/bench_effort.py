@@ -7,14 +7,18 @@ Run (one command per preset; the opening table of BENCHMARKS.md):
     python benchmarks/bench_effort.py --effort thorough --anchors 4 6 8 10 --seeds 5
     python benchmarks/bench_effort.py --summary RUNS.jsonl [...]   # the table
 
-Each run is ``seed_then_pso(techtile, M, rng=seed, effort=...)`` on ``--workers`` processes
-(as ``anchorplan plan --anchors M --effort ... --seed ...``), one JSON line: its seconds
-(the plan, and per phase), the field check (random tags, anchors mounted within 3 cm)
-σ / mean / P95 (positions kept inside the room, and the same fixes unbounded), and the
-validation at the 270 nodes σ / mean / P95 (both ways too) beside the paper's Table I. ``--summary``
-prints, per preset and M: the field σ and P95 (median and worst over the seeds), the
-unbounded field σ (median), the 270-node σ and P95 (median and worst) against Table I, how many runs
-beat Table I's σ, and the median seconds per phase.
+    python benchmarks/bench_effort.py --effort default --anchors 8 --system recommended
+
+Each run is ``seed_then_pso(techtile, M, system=..., rng=seed, effort=...)`` on
+``--workers`` processes (as ``anchorplan plan --anchors M --effort ... --seed ...
+--system ...``; ``--system`` default the paper's, the system Table I compares with; seeds
+``--first-seed`` … ``--first-seed + --seeds − 1``), one JSON line: its seconds (the plan,
+and per phase), the field check (random tags, anchors mounted within 3 cm) σ / mean /
+P95 / median, and the validation at the 270 nodes σ / mean / P95 / median beside the
+paper's Table I. ``--summary`` prints, per preset, system and M: the field σ and P95
+(median and worst over the seeds), the field's median error (median), the 270-node σ and
+P95 (median and worst) against Table I, how many runs beat Table I's σ, and the median
+seconds per phase.
 """
 
 from __future__ import annotations
@@ -31,23 +35,21 @@ from placement.effort import EFFORT_NAMES
 PHASES = ("search", "pso", "refinement", "finalists", "validation")
 
 
-def run(effort: str, M: int, seed: int, pool, variant: dict) -> None:
+def run(effort: str, M: int, seed: int, pool, variant: dict, system: str = "paper") -> None:
     from placement import seed_then_pso
 
     t0 = time.perf_counter()
-    res = seed_then_pso(None, M, rng=seed, effort=effort, executor=pool, progress=False,
-                        **variant)  # fmt: skip
+    res = seed_then_pso(None, M, system=system, rng=seed, effort=effort, executor=pool,
+                        progress=False, **variant)  # fmt: skip
     seconds = time.perf_counter() - t0
     v, f = res.validation, res.validation.field
     changed = {k: _changes(effort, k, v) for k, v in variant.items()}
-    emit("effort", effort=effort, M=M, seed=seed, variant=changed, seconds=seconds,
-         phases={k: p["seconds"] for k, p in res.phases.items()},
-         field={"std": f.std, "mean": f.mean, "p95": f.p95, "availability": f.availability},
-         field_unbounded={"std": f.unbounded.std, "mean": f.unbounded.mean,
-                          "p95": f.unbounded.p95},
-         grid={"std": v.std, "mean": v.mean, "p95": v.p95, "realizations": v.realizations},
-         grid_unbounded={"std": v.unbounded.std, "mean": v.unbounded.mean,
-                         "p95": v.unbounded.p95},
+    emit("effort", effort=effort, M=M, seed=seed, variant=changed, system=res.system.name,
+         seconds=seconds, phases={k: p["seconds"] for k, p in res.phases.items()},
+         field={"std": f.std, "mean": f.mean, "p95": f.p95, "median": f.median,
+                "availability": f.availability},
+         grid={"std": v.std, "mean": v.mean, "p95": v.p95, "median": v.median,
+               "realizations": v.realizations},
          table1=PAPER_TABLE1.get(M), anchors=res.anchors.tolist())  # fmt: skip
 
 
@@ -63,7 +65,7 @@ def summary(rows: list[dict]) -> None:
     """The markdown table of finished runs (module docstring)."""
     med = statistics.median
     print("| preset | M | runs | field σ median / worst (m) | field P95 median / worst (m) "
-          "| field σ unbounded, median (m) "
+          "| field median, median (m) "
           "| 270-node σ median / worst (m) | Table I σ | beats Table I σ "
           "| 270-node P95 median / worst (m) | Table I P95 | seconds median (max) "
           "| per phase, median s |")  # fmt: skip
@@ -71,7 +73,8 @@ def summary(rows: list[dict]) -> None:
 
     def name(r) -> str:
         v = r.get("variant") or {}
-        return r["effort"] + "".join(f", {k} {json.dumps(c)}" for k, c in v.items())
+        system = "" if r.get("system", "paper") == "paper" else f", system {r['system']}"
+        return r["effort"] + system + "".join(f", {k} {json.dumps(c)}" for k, c in v.items())
 
     keys = sorted({(name(r), r["effort"], r["M"]) for r in rows},
                   key=lambda k: (EFFORT_NAMES.index(k[1]), k[0], k[2]))  # fmt: skip
@@ -79,8 +82,8 @@ def summary(rows: list[dict]) -> None:
         rs = [r for r in rows if name(r) == label and r["M"] == M]
         fs, fp = [r["field"]["std"] for r in rs], [r["field"]["p95"] for r in rs]
         gs, gp = [r["grid"]["std"] for r in rs], [r["grid"]["p95"] for r in rs]
-        fu = [r["field_unbounded"]["std"] for r in rs if "field_unbounded" in r]
-        unbounded = f"{med(fu):.3f}" if fu else "–"
+        fm = [r["field"]["median"] for r in rs if "median" in r["field"]]
+        unbounded = f"{med(fm):.3f}" if fm else "–"
         t1 = PAPER_TABLE1.get(M) or {}
         beats = sum(s < t1.get("std", float("inf")) for s in gs)
         secs = [r["seconds"] for r in rs]
@@ -96,6 +99,8 @@ def summary(rows: list[dict]) -> None:
 def main() -> None:
     ap = runs_parser(__doc__, [8], seeds_help="seeds 0 … N−1 (5)")
     ap.add_argument("--effort", default="default", choices=EFFORT_NAMES)
+    ap.add_argument("--system", default="paper", help="the system planned for (a preset)")
+    ap.add_argument("--first-seed", type=int, default=0, help="seeds from this one (0)")
     ap.add_argument(
         "--finalist-exact-draws",
         type=int,
@@ -132,8 +137,8 @@ def main() -> None:
         variant["search"] = dataclasses.replace(preset.search, **table)  # fmt: skip
     with WorkerPool(args.workers) as pool:
         for M in args.anchors:
-            for seed in range(args.seeds):
-                run(args.effort, M, seed, pool, variant)
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
+                run(args.effort, M, seed, pool, variant, args.system)
 
 
 if __name__ == "__main__":

@@ -52,8 +52,8 @@ class RangeTable:
     ranges (D, P, N) estimated ranges (m; NaN where the receiver reported none: the
     candidate beyond the signal's reach, or not heard); distances (D, P, N) true ranges from the
     mounted points (m); room the room and system the system simulated (its positioning
-    solves the table's fixes). seed, mount_tolerance (m), exact_draws and precision
-    describe how it was drawn.
+    solves the table's fixes); line_of_sight (D, P, N) bool, nothing blocks the direct
+    path. seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
     """
 
     candidates: np.ndarray
@@ -62,6 +62,7 @@ class RangeTable:
     distances: np.ndarray
     room: Room
     system: System
+    line_of_sight: np.ndarray
     seed: int
     mount_tolerance: float
     exact_draws: int
@@ -169,13 +170,15 @@ def mounted_points(
     return project(room, out)
 
 
-def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(D, P, n) ranges and (D, P, n) true distances of candidates (n, 3), indices ids."""
+def _columns(room: Room, candidates, ids, nodes, spec: dict):
+    """(D, P, n) ranges, true distances and lines of sight of candidates (n, 3), indices
+    ids."""
     from simulation.evaluation import RangingScene
 
     D, P, _ = nodes.shape
     ranges = np.empty((D, P, len(ids)))
     dist = np.empty((D, P, len(ids)))
+    los = np.empty((D, P, len(ids)), dtype=bool)
     exact_scene = None  # exact draws share nodes and points: one noise-free scene
     for d in range(D):
         exact = d < spec["exact_draws"]
@@ -201,7 +204,8 @@ def _columns(room: Room, candidates, ids, nodes, spec: dict) -> tuple[np.ndarray
         )
         ranges[d] = scene.detect(scene.windows + noise)[0]  # NaN: no range
         dist[d] = np.linalg.norm(nodes[d][:, None, :] - mounted[None], axis=-1)
-    return ranges, dist
+        los[d] = scene.line_of_sight
+    return ranges, dist, los
 
 
 def _simulate(room, candidates, first_id: int, nodes, spec, executor, chunk, progress=None):
@@ -211,9 +215,7 @@ def _simulate(room, candidates, first_id: int, nodes, spec, executor, chunk, pro
         for i in range(0, len(candidates), chunk)
     ]
     parts = run_jobs(executor, _columns, args, progress=progress)
-    return np.concatenate([p[0] for p in parts], axis=2), np.concatenate(
-        [p[1] for p in parts], axis=2
-    )
+    return tuple(np.concatenate([p[k] for p in parts], axis=2) for k in range(3))
 
 
 def range_table(
@@ -266,8 +268,8 @@ def range_table(
     chunk = checks.count("chunk", chunk, low=1)
     if nodes.ndim == 2:
         nodes = node_draws(room, nodes, draws, spec["exact_draws"], seed)
-    ranges, dist = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
-    return RangeTable(cand, nodes, ranges, dist, room, **spec)
+    ranges, dist, los = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
+    return RangeTable(cand, nodes, ranges, dist, room, line_of_sight=los, **spec)
 
 
 def extend_table(
@@ -289,7 +291,7 @@ def extend_table(
         "precision": table.precision,
         "system": table.system,
     }
-    ranges, dist = _simulate(
+    ranges, dist, los = _simulate(
         room, new, len(table.candidates), table.nodes, spec, executor, int(chunk)
     )
     return dataclasses.replace(
@@ -297,6 +299,7 @@ def extend_table(
         candidates=np.concatenate([table.candidates, new]),
         ranges=np.concatenate([table.ranges, ranges], axis=2),
         distances=np.concatenate([table.distances, dist], axis=2),
+        line_of_sight=np.concatenate([table.line_of_sight, los], axis=2),
     )
 
 

@@ -151,6 +151,15 @@ class Chain:
         chain.nfev = tries
         return chain
 
+    @classmethod
+    def at(cls, table, S, statistic: str, rng) -> Chain:
+        """A chain started from the layout S (M,) of candidate indices."""
+        S = np.asarray(S, dtype=int)
+        f = float(table_costs(table, S[None], statistic)[0])
+        chain = cls(S, f, S.copy(), f, rng, rng.permutation(len(S)))
+        chain.nfev = 1
+        return chain
+
     def advance(self, table, statistic, nbr, *, batch, patience, until, budget, moves=2):
         """Take steps while fewer than ``until`` layouts were scored; never score more
         than ``budget`` in all. Returns self."""
@@ -244,6 +253,9 @@ class SearchOptions:
         each on the table grown by its own columns.
     keep : distinct optima returned as seeds.
     precision : the receiver DSP's precision for the table.
+    coverage_k : in a room where walls, obstacles or the signal's reach hide candidates
+        from some nodes, the first chain starts from the coverage selection that makes
+        the most nodes see this many anchors (:mod:`placement.coverage`; 0: off).
     """
 
     spacing: float | None = None
@@ -265,6 +277,7 @@ class SearchOptions:
     fine_optima: int = 1
     keep: int = 4
     precision: str = "float32"
+    coverage_k: int = 5
 
     def __post_init__(self) -> None:
         if self.spacing is not None:
@@ -297,6 +310,7 @@ class SearchOptions:
         checks.count("fine_optima", self.fine_optima, low=1, high=1000)
         checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
+        checks.count("coverage_k", self.coverage_k, low=0, high=MAX_ANCHORS)
 
     def spacing_for(self, room: Room) -> float:
         """The candidate spacing (m) in ``room``: ``spacing`` when given, else
@@ -331,6 +345,7 @@ def first_draws(table: RangeTable, n: int) -> RangeTable:
         nodes=table.nodes[:n],
         ranges=table.ranges[:n],
         distances=table.distances[:n],
+        line_of_sight=table.line_of_sight[:n],
         exact_draws=min(table.exact_draws, n),
     )
 
@@ -392,13 +407,16 @@ def _distinct(found) -> list[tuple[np.ndarray, float]]:
 SEGMENTS = 8
 
 
-def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress):
-    """Start, advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
+def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts=()):
+    """Start (the first chains from ``starts``, index layouts (M,), the others from random
+    layouts), advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
     ``workers`` jobs; [(S, cost, local, evaluations)] per chain."""
     n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
     view = first_draws(table, n)
     chains = [
         Chain.start(view, M, statistic, opt.random_starts, streams.stream(seed, 10, k))
+        if k >= len(starts)
+        else Chain.at(view, starts[k], statistic, streams.stream(seed, 10, k))
         for k in range(opt.chains)
     ]
     parts = _split(list(range(opt.chains)), max(1, workers))
@@ -480,10 +498,26 @@ def simulated_select(
         raise ValueError(f"candidates: need at least M = {M} points, got {len(table.candidates)}")
     t1 = time.perf_counter()
     nbr = nearest(table.candidates, opt.neighbours)
-    found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress)
+    cover = _coverage_start(table, M, opt.coverage_k)
+    starts = () if cover is None else (cover.indices,)
+    found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
-    return _selection(table, statistic, found, nfev, (t0, t1, t2))
+    sel = _selection(table, statistic, found, nfev, (t0, t1, t2))
+    return sel if cover is None else dataclasses.replace(sel, coverage=cover)
+
+
+def _coverage_start(table, M: int, k: int):
+    """The coverage selection (:mod:`placement.coverage`) of M of the table's candidates
+    for ``min(k, M)`` anchors in line of sight, when some node does not see every candidate
+    (else None: in a convex empty room within reach every layout covers every node)."""
+    from placement.coverage import plane_groups, select_coverage, visibility
+
+    V = visibility(table)
+    if k == 0 or bool(np.all(V)):
+        return None
+    groups = plane_groups(table.room, table.candidates)
+    return select_coverage(V, M, min(k, M), groups=groups)
 
 
 def _indices(table: RangeTable, anchors: np.ndarray) -> np.ndarray:
@@ -576,7 +610,9 @@ class SimulatedSelection(LayoutResult):
     cost (``fun``) its statistic on the table (m² for the variance, m otherwise); optima
     the distinct local optima found, as (indices, cost), best first; nfev the layouts
     scored on the table; table_windows the received windows simulated; timings in
-    seconds; status a code of :data:`SELECTION_STATUS`.
+    seconds; status a code of :data:`SELECTION_STATUS`; coverage the coverage selection
+    that started the first chain (:class:`placement.coverage.CoverageSelection`, None
+    where every node sees every candidate).
     """
 
     FUN: ClassVar[str] = "cost"
@@ -595,6 +631,7 @@ class SimulatedSelection(LayoutResult):
     status: int = 0
     message: str = ""
     table: RangeTable | None = field(default=None, repr=False)
+    coverage: Any = None
 
     def layouts(self, k: int | None = None) -> np.ndarray:
         """(k, M, 3) the anchors of the k best local optima."""
@@ -615,4 +652,5 @@ class SimulatedSelection(LayoutResult):
             "status": self.status,
             "message": self.message,
             "fun": self.cost,
+            **({} if self.coverage is None else {"coverage": self.coverage.to_dict()}),
         }

@@ -93,7 +93,7 @@ def _temperature(room: Room, system: System, a, nodes, R: int, offsets, seed: in
 def _mounting(room: Room, system: System, a, nodes, tolerances, draws: int, seed: int) -> list:
     rows = []
     for tol in tolerances:
-        errors = [mounted_errors(room, a, nodes, float(tol), d, seed, stream=14, system=system)
+        errors = [mounted_errors(room, a, nodes, float(tol), d, seed, stream=14, system=system)[0]
                   for d in range(draws)]  # fmt: skip
         rows.append({"tolerance": float(tol), **_row(errors)})
     return rows

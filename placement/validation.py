@@ -31,10 +31,13 @@ from typing import Any
 
 import numpy as np
 
+from analysis.coverage import covered_share
 from analysis.fim import DEFAULT_SIGMA, peb
+from placement.coverage import K_LINE_OF_SIGHT
 from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks, streams
+from simulation.robust import VERIFIED
 from simulation.room import Room
 from simulation.statistics import dop, dop_rms, error_stats, node_rmse, node_std
 from simulation.system import as_system
@@ -73,8 +76,10 @@ class ValidationOptions:
 @dataclass(frozen=True)
 class ErrorSummary:
     """Euclidean position errors summarized over the fixes: σ (population), mean, P95,
-    RMS and median (m), ``n`` fixes, ``n_invalid`` realizations without one, and the
-    availability, n / (n + n_invalid) (:func:`simulation.statistics.error_stats`)."""
+    RMS and median (m), ``n`` fixes, ``n_invalid`` realizations without one, the
+    availability, n / (n + n_invalid) (:func:`simulation.statistics.error_stats`), and
+    ``verified``, the share of the realizations whose fix is verified (5 or more anchors
+    consistent, :mod:`simulation.robust`; 0 for a least-squares system)."""
 
     std: float
     mean: float
@@ -84,6 +89,7 @@ class ErrorSummary:
     n_invalid: int
     availability: float
     median: float = math.nan
+    verified: float = math.nan
 
     def summary_dict(self) -> dict[str, Any]:
         """The eight figures as a plain dict, in the order above."""
@@ -183,7 +189,10 @@ class Validation:
     errors, ``n_invalid`` without a fix and the ``availability``; ``mean_peb`` (m, √tr J⁻¹
     at the constant σ of ``peb_definition``); ``per_node`` (P,) arrays by
     :data:`PER_NODE_KEYS` (availability, RMSE, σ, the paper's DOP, the RMS-based DOP);
-    ``errors`` (R, P) m, NaN without a fix; ``median`` (m). Then the other checks that
+    ``errors`` (R, P) m, NaN without a fix; ``median`` (m); ``verified`` the share of
+    verified fixes; ``covered`` the share of the nodes that see at least ``coverage_k``
+    anchors in line of sight and reach (:func:`analysis.coverage.covered_share`). Then the
+    other checks that
     ran (None otherwise): ``held_out``, ``mounting``, ``field``; and a ``message`` when
     some realizations have no fix or some errors are not finite.
     """
@@ -201,6 +210,9 @@ class Validation:
     per_node: dict[str, np.ndarray]
     errors: np.ndarray
     median: float = math.nan
+    verified: float = math.nan
+    coverage_k: int = K_LINE_OF_SIGHT
+    covered: float = math.nan
     held_out: HeldOut | None = None
     mounting: MountingCheck | None = None
     field: FieldCheck | None = None
@@ -211,7 +223,8 @@ class Validation:
         out: dict[str, Any] = {
             k: getattr(self, k)
             for k in ("realizations", "seed", "std", "mean", "p95", "rms", "median",
-                      "n_invalid", "availability", "mean_peb", "peb_definition")
+                      "verified", "n_invalid", "availability", "mean_peb", "peb_definition",
+                      "coverage_k", "covered")
         }  # fmt: skip
         out["per_node"] = {k: np.asarray(v).tolist() for k, v in self.per_node.items()}
         out["errors"] = np.round(np.asarray(self.errors, dtype=float), 6).tolist()
@@ -232,8 +245,10 @@ class Validation:
             realizations=int(d["realizations"]),
             seed=int(d["seed"]),
             **{k: _num(d.get(k)) for k in ("std", "mean", "p95", "rms", "median",
-                                           "availability", "mean_peb")},
+                                           "verified", "availability", "mean_peb")},
             n_invalid=int(d.get("n_invalid", 0)),
+            coverage_k=int(d.get("coverage_k", K_LINE_OF_SIGHT)),
+            covered=_num(d.get("covered")),
             peb_definition=str(d.get("peb_definition", "")),
             per_node={k: _array(v) for k, v in d.get("per_node", {}).items()},
             errors=_array(d.get("errors", [])),
@@ -242,7 +257,8 @@ class Validation:
         )  # fmt: skip
 
 
-_SUMMARY_KEYS = ("std", "mean", "p95", "rms", "n", "n_invalid", "availability", "median")
+_SUMMARY_KEYS = ("std", "mean", "p95", "rms", "n", "n_invalid", "availability", "median",
+                 "verified")  # fmt: skip
 
 
 def _num(v, kind=float):
@@ -255,11 +271,13 @@ def _array(v) -> np.ndarray:
     return np.array(v, dtype=float)
 
 
-def summary(errors) -> dict[str, float]:
+def summary(errors, verified=None) -> dict[str, float]:
     """σ (population), mean, P95, RMS and median (m) of the fixes among Euclidean errors,
-    how many, and the availability, the share of node realizations with a fix
-    (:func:`simulation.statistics.error_stats`)."""
+    how many, the availability, the share of node realizations with a fix
+    (:func:`simulation.statistics.error_stats`), and the share of verified fixes among
+    them (``verified``: booleans of the errors' shape; None: NaN)."""
     s = error_stats(np.asarray(errors, dtype=float).ravel())
+    s["verified"] = math.nan if verified is None else float(np.mean(verified))
     return {k: s[k] for k in _SUMMARY_KEYS}
 
 
@@ -315,10 +333,11 @@ def _evaluate(room, system, anchors, nodes, realizations, seed, precision):
 def mounted_errors(
     room, anchors, nodes, tolerance, draw, seed, precision=None, stream: int = 7, system=None
 ) -> np.ndarray:
-    """(P,) position errors (m) at ``nodes`` when the anchors (M, 3) are mounted within
-    ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise draw from the
-    stream ``(stream, draw)`` of ``seed``; positions solved with the planned anchors by the
-    ``system``'s positioning (``precision``: the receiver DSP's, None for the default)."""
+    """(2, P): row 0 the position errors (m) at ``nodes`` when the anchors (M, 3) are
+    mounted within ``tolerance`` m of the plan as in draw ``draw`` of ``seed``, one noise
+    draw from the stream ``(stream, draw)`` of ``seed``, positions solved with the planned
+    anchors by the ``system``'s positioning (``precision``: the receiver DSP's, None for the
+    default); row 1 whether each fix is verified (1.0) or not (0.0)."""
     system = as_system(system)
     ranges = _mounted_ranges(room, system, anchors, nodes, tolerance, draw, seed, precision,
                              stream)  # fmt: skip
@@ -328,11 +347,11 @@ def mounted_errors(
 def field_errors(
     room, anchors, tags: int, tolerance, draw, seed, precision=None, system=None
 ) -> np.ndarray:
-    """(tags,) position errors (m) of draw ``draw`` of the field check: ``tags`` uniform
-    random tag points (:func:`random_nodes`, the stream (0, draw) of ``seed``) with the
-    anchors (M, 3) mounted within ``tolerance`` m (:func:`mounted_errors`' mounting of
-    the same draw), one noise realization, positions solved by the ``system``'s
-    positioning."""
+    """(2, tags): the position errors (m) and whether each fix is verified, of draw
+    ``draw`` of the field check: ``tags`` uniform random tag points (:func:`random_nodes`,
+    the stream (0, draw) of ``seed``) with the anchors (M, 3) mounted within ``tolerance``
+    m (:func:`mounted_errors`' mounting of the same draw), one noise realization,
+    positions solved by the ``system``'s positioning."""
     nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
     return mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision, 1, system)
 
@@ -351,10 +370,10 @@ def _mounted_ranges(room, system, anchors, nodes, tolerance, draw, seed, precisi
 
 
 def _errors(room, system, anchors, nodes, ranges) -> np.ndarray:
-    """(P,) errors (m) of the positions solved from ``ranges`` with the planned anchors by
-    the ``system``'s positioning."""
-    x = system.positioning.locate(room, anchors, ranges)
-    return np.linalg.norm(x - nodes, axis=-1)
+    """(2, P) errors (m) of the positions solved from ``ranges`` with the planned anchors by
+    the ``system``'s positioning, and whether each fix is verified (1.0, else 0.0)."""
+    fix = system.positioning.locate(room, anchors, ranges, full_output=True)
+    return np.stack([np.linalg.norm(fix.x - nodes, axis=-1), fix.verified.astype(float)])
 
 
 def validate_layout(
@@ -389,6 +408,7 @@ def validate_layout(
     results = iter(run_calls(executor, flat, progress=progress))
     jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
     grid = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
+    grid["covered"] = covered_share(room, a, nodes, system=as_system(system), k=K_LINE_OF_SIGHT)
     message = None
     if grid["availability"] < 1:
         message = (
@@ -436,10 +456,11 @@ def _grid_block(parts, a, nodes, opt: ValidationOptions, seed, sigma) -> dict[st
     """The grid check's fields of :class:`Validation` from its evaluations ``parts``."""
     e = np.concatenate([p.errors for p in parts])
     range_errors = np.concatenate([p.range_errors for p in parts])
+    verified = np.concatenate([p.fix_quality == VERIFIED for p in parts])
     return {
         "realizations": int(opt.realizations),
         "seed": int(seed),
-        **{k: v for k, v in summary(e).items() if k != "n"},
+        **{k: v for k, v in summary(e, verified).items() if k != "n"},
         "mean_peb": float(np.mean(peb(a, nodes, sigma))),
         "peb_definition": f"sqrt(tr J^-1), metres, sigma_r = {sigma:g} m",
         "per_node": {
@@ -460,16 +481,17 @@ def _other_blocks(jobs: dict, opt: ValidationOptions, tolerance: float) -> dict[
         (g,), (r,) = jobs["held_grid"], jobs["held_random"]
         out["held_out"] = HeldOut(
             int(opt.held_out_realizations),
-            NodesSummary(**summary(g.errors), nodes=int(len(g.nodes))),
-            NodesSummary(**summary(r.errors), nodes=int(len(r.nodes))),
+            NodesSummary(**summary(g.errors, g.fix_quality == VERIFIED), nodes=int(len(g.nodes))),
+            NodesSummary(**summary(r.errors, r.fix_quality == VERIFIED), nodes=int(len(r.nodes))),
         )
     if "mounting" in jobs:
-        mounting = summary(np.concatenate(jobs["mounting"]))
+        both = np.concatenate(jobs["mounting"], axis=1)  # (2, draws · P)
+        mounting = summary(both[0], both[1] > 0)
         out["mounting"] = MountingCheck(**mounting, tolerance_m=float(tolerance),
                                         draws=int(opt.mount_draws))  # fmt: skip
     if "field" in jobs:
-        errors = np.concatenate(jobs["field"])  # (draws · tags,)
-        out["field"] = FieldCheck(**summary(errors), draws=int(opt.field_draws),
+        both = np.concatenate(jobs["field"], axis=1)  # (2, draws · tags)
+        out["field"] = FieldCheck(**summary(both[0], both[1] > 0), draws=int(opt.field_draws),
                                   tags_per_draw=int(opt.random_nodes),
                                   tolerance_m=float(tolerance))  # fmt: skip
     return out

@@ -27,6 +27,7 @@ from simulation.multipath import ImageSet, compute_paths
 from simulation.noise import DEFAULT_SNR_DB, check_snr, noise_sigma
 from simulation.received import received_windows
 from simulation.receiver import DEFAULT_PRECISION, HEARD, PRECISIONS, dsp_for
+from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED
 from simulation.room import Room, as_room
 from simulation.system import System, as_system
 
@@ -209,6 +210,7 @@ class Evaluation:
     fix_status: np.ndarray = field(default=None, repr=False)
     line_of_sight: np.ndarray = field(default=None, repr=False)
     system: System = field(default_factory=System, repr=False)
+    fix_quality: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.range_status is None:  # built by hand: every range a range
@@ -218,6 +220,9 @@ class Evaluation:
             object.__setattr__(self, "fix_status", np.where(self.converged, 1, 0))
         if self.line_of_sight is None:  # built by hand: nothing blocks
             object.__setattr__(self, "line_of_sight", np.ones(self.ranges.shape[1:], bool))
+        if self.fix_quality is None:  # built by hand: every fix unverified
+            q = np.where(np.isfinite(self.errors), UNVERIFIED, NO_FIX).astype(np.int8)
+            object.__setattr__(self, "fix_quality", q)
 
     @property
     def realizations(self) -> int:
@@ -242,6 +247,12 @@ class Evaluation:
         """The share of the R·P node realizations with a position fix (4 or more anchors
         heard)."""
         return self.stats["availability"]
+
+    @property
+    def verified(self) -> float:
+        """The share of the R·P node realizations with a verified fix (5 or more anchors
+        consistent: :mod:`simulation.robust`; 0 for least squares, which verifies nothing)."""
+        return float(np.mean(self.fix_quality == VERIFIED)) if self.fix_quality.size else 0.0
 
     @property
     def heard(self) -> np.ndarray:
@@ -316,6 +327,7 @@ class Evaluation:
             "noise_sigma": self.noise_sigma.tolist(),
             "stats": {
                 **self.stats,
+                "verified": self.verified,
                 "n_unconverged": self.n_unconverged,
                 "anchor_geometry": self.geometry,
                 "axis_mean": np.nanmean(ax, axis=(0, 1)).tolist() if fixed else None,
@@ -453,4 +465,5 @@ def evaluate_layout(
         fix_status=fix.status,
         line_of_sight=scene.line_of_sight,
         system=system,
+        fix_quality=fix.quality,
     )

@@ -28,13 +28,14 @@ anchors that hear the tag").
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
 from simulation import checks, degeneracy
+from simulation.least_squares import lm_rows
+from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, robust_rows, thresholds
 
 logger = logging.getLogger(__name__)
 
@@ -54,8 +55,12 @@ RANGE_CEILING = 1e5
 #: the fewest heard anchors that fix a node with missing ranges
 MIN_HEARD = 4
 #: the positioning methods (:class:`simulation.Positioning`): least squares on every heard
-#: range (the paper's)
-METHODS = ("ls",)
+#: range (the paper's), and least squares on the anchors consistent with each other
+#: (:mod:`simulation.robust`)
+METHODS = ("ls", "robust")
+#: the robust method's defaults: the receiver's range σ (m) and the false-alarm
+#: probability of its consistency test
+RANGE_SIGMA, FALSE_ALARM = 0.01, 1e-3
 
 
 @dataclass(frozen=True)
@@ -64,7 +69,10 @@ class PositionFix:
 
     x : (..., P, 3) estimates in metres. converged : (..., P) bool. status : (..., P) int
     (see :data:`STATUS_MESSAGES`). nit : (..., P) iterations used. cost : (..., P)
-    F(x) = ½ Σ residual² in m². start : (..., P, 3) starting points.
+    F(x) = ½ Σ residual² in m² over the anchors used. start : (..., P, 3) starting points.
+    used : (..., P, M) bool, the anchors each fix rests on (the heard ones; the robust
+    method's consistent ones). quality : (..., P) int, :data:`simulation.robust.QUALITY`
+    (least squares verifies nothing: its fixes are unverified).
     """
 
     x: np.ndarray
@@ -73,6 +81,13 @@ class PositionFix:
     nit: np.ndarray
     cost: np.ndarray
     start: np.ndarray
+    used: np.ndarray | None = None
+    quality: np.ndarray | None = None
+
+    @property
+    def verified(self) -> np.ndarray:
+        """(..., P) bool: the fix is verified (5 or more consistent anchors)."""
+        return np.asarray(self.quality) == VERIFIED
 
     @property
     def success(self) -> bool:
@@ -86,6 +101,7 @@ class PositionFix:
             "status": self.status.tolist(),
             "nit": self.nit.tolist(),
             "cost": self.cost.tolist(),
+            "quality": None if self.quality is None else self.quality.tolist(),
         }
 
 
@@ -143,26 +159,35 @@ def locate(
     anchors,
     ranges,
     *,
+    method: str = "ls",
     region=None,
     bounded: bool = False,
+    floor_plan=None,
     x0=None,
     max_iter: int = 100,
     xtol: float = 1e-10,
     ftol: float = 1e-12,
     gtol: float = 1e-12,
+    range_sigma: float = RANGE_SIGMA,
+    false_alarm: float = FALSE_ALARM,
     full_output: bool = False,
 ):
-    """Least-squares positions from ranges: anchors (M, 3), ranges (..., P, M) in metres.
+    """Positions from ranges: anchors (M, 3), ranges (..., P, M) in metres.
 
     Several layouts at once: anchors (L, M, 3) and ranges (L, ..., P, M), layout l's
     ranges in ``ranges[l]``; each node is solved as it would be alone (up to rounding).
 
     Parameters
     ----------
+    method : ``"ls"``, least squares on every heard range (the paper's), or ``"robust"``,
+        least squares on the anchors consistent to ``range_sigma`` (m) at the
+        false-alarm probability ``false_alarm`` of the χ² test (:mod:`simulation.robust`).
     region : (lo (3,), hi (3,)) box the nodes are known to be in (e.g. ``(0, room.size)``);
         sets the start (box centre, or the linear solution when inside) and the bounds.
         Default: the anchors' bounding box.
-    bounded : keep the iterates inside ``region``.
+    bounded : keep the iterates inside ``region``, and inside ``floor_plan`` when given.
+    floor_plan : (K, 2) the floor plan's corners (m, counter-clockwise) a bounded iterate
+        is kept in (a position in a cut-out corner of the plan is not in the room).
     x0 : optional (..., P, 3) or (3,) starting points (overrides the start rule).
     max_iter, xtol, ftol, gtol : iteration limit and tolerances (see module docstring).
     full_output : return a :class:`PositionFix` instead of the (..., P, 3) array.
@@ -182,6 +207,11 @@ def locate(
         (xtol, ftol, gtol),
         {"bounded": bounded, "full_output": full_output},
     )
+    checks.choice("method", method, METHODS)
+    poly = _floor_plan(floor_plan)
+    if method == "robust":
+        checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
+        checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
@@ -192,10 +222,15 @@ def locate(
     partial = ~np.all(heard, axis=1)
     x, lo, hi = _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded)
     start = x.copy()
+    tols = (xtol, ftol, gtol)
     x, cost, status, nit = _levenberg_marquardt(
-        layouts, owner, R, x, lo, hi, bounded, int(max_iter), (xtol, ftol, gtol)
+        layouts, owner, R, x, lo, hi, bounded, int(max_iter), tols, poly
     )
     _mark_undetermined(layouts, owner, svd, heard, partial, x, cost, status)
+    used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
+    if method == "robust":
+        used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
+                                poly, int(max_iter), tols, range_sigma, false_alarm)  # fmt: skip
     converged = status > 0
     if not np.all(converged):
         n = int(np.sum(~converged))
@@ -210,6 +245,8 @@ def locate(
         nit=nit.reshape(lead),
         cost=cost.reshape(lead),
         start=start.reshape(*lead, 3),
+        used=used.reshape(*lead, M),
+        quality=quality.reshape(lead),
     )
 
 
@@ -394,7 +431,7 @@ def _masked_starts(a, owner, R, lo, hi, rows, x):  # pragma: no cover - compiled
             x[b, 0], x[b, 1], x[b, 2] = p0, p1, p2
 
 
-def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
+def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols, poly=None):
     """Damped Gauss–Newton (Levenberg–Marquardt, Nielsen's damping update) on every row:
     ranges R (B, M), anchors a (L, M, 3) with row b's layout ``owner[b]``, starts x (B, 3)
     and bounds lo, hi (B, 3). Returns the positions (B, 3), costs ½Σr² (B,), statuses (B,)
@@ -402,7 +439,7 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
     B = len(R)
     out = (np.empty((B, 3)), np.empty(B), np.zeros(B, dtype=np.int8), np.zeros(B, dtype=np.int32))
     if B:
-        _lm_rows(
+        lm_rows(
             _c(a),
             _c(owner, np.int64),
             _c(R),
@@ -410,6 +447,7 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
             _c(np.broadcast_to(lo, (B, 3))),
             _c(np.broadcast_to(hi, (B, 3))),
             bool(bounded),
+            _c(np.empty((0, 2)) if poly is None else poly),
             int(max_iter),
             *(float(t) for t in tols),
             *out,
@@ -417,145 +455,33 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols):
     return out
 
 
+def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, false_alarm):
+    """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
+    fixes (:mod:`simulation.robust`); returns the anchors used (B, M) and the qualities."""
+    B, M = R.shape
+    used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
+    if B:
+        x, cost, status, nit = fix
+        robust_rows(_c(a), _c(owner, np.int64), _c(R), x, cost, status, nit,
+                    _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
+                    bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
+                    thresholds(false_alarm, M), used, quality)  # fmt: skip
+    return used, quality
+
+
+def _floor_plan(floor_plan) -> np.ndarray:
+    """(K, 2) the floor plan's corners as a C array (empty (0, 2) without one)."""
+    if floor_plan is None:
+        return np.empty((0, 2))
+    poly = checks.reals("floor_plan", floor_plan)
+    if poly.ndim != 2 or poly.shape[1] != 2 or len(poly) < 3:
+        raise ValueError(
+            f"floor_plan: expected the corners (K, 2) of a polygon, K >= 3, got {poly.shape}"
+        )
+    return _c(poly)
+
+
 def _c(x, dtype=float) -> np.ndarray:
     """``x`` as a writable C-contiguous array (a copy only when it is not one already): the
     compiled loop then has one signature, whatever views the caller passed."""
     return np.require(x, dtype, ("C", "W"))
-
-
-@numba.njit(cache=True)
-def _residuals(x, a, rho, r, u):  # pragma: no cover - compiled
-    """Residuals r (M,) and unit vectors u (M, 3) from the anchors a (M, 3) to the point
-    x (3,) for ranges rho (M,); returns ½Σr²."""
-    cost = 0.0
-    for j in range(a.shape[0]):
-        if rho[j] != rho[j]:  # NaN: not heard, no residual
-            r[j] = 0.0
-            u[j, 0] = u[j, 1] = u[j, 2] = 0.0
-            continue
-        d0, d1, d2 = x[0] - a[j, 0], x[1] - a[j, 1], x[2] - a[j, 2]
-        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        inv = 1.0 / dist if dist > 0 else 1.0
-        r[j] = dist - rho[j]
-        u[j, 0], u[j, 1], u[j, 2] = d0 * inv, d1 * inv, d2 * inv
-        cost += r[j] * r[j]
-    return 0.5 * cost
-
-
-@numba.njit(cache=True)
-def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
-    """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
-    because the descent direction −Jᵀr points out of the box there."""
-    for k in range(3):
-        g = 0.0
-        for j in range(r.shape[0]):
-            g += r[j] * u[j, k]
-        free[k] = not ((x[k] <= lo[k] and g > 0) or (x[k] >= hi[k] and g < 0))
-
-
-@numba.njit(cache=True)
-def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
-    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
-    (a held one, ``free[k]`` False, gets δ_k = 0); returns (g0, g1, g2) = Jᵀr with the held
-    coordinates' entries zero (the projected gradient)."""
-    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
-    for j in range(r.shape[0]):
-        u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
-        s00 += u0 * u0
-        s01 += u0 * u1
-        s02 += u0 * u2
-        s11 += u1 * u1
-        s12 += u1 * u2
-        s22 += u2 * u2
-        g0 += r[j] * u0
-        g1 += r[j] * u1
-        g2 += r[j] * u2
-    # a held coordinate leaves the system: its row and column become the identity's
-    if not free[0]:
-        s00, s01, s02, g0 = 1.0, 0.0, 0.0, 0.0
-    if not free[1]:
-        s11, s01, s12, g1 = 1.0, 0.0, 0.0, 0.0
-    if not free[2]:
-        s22, s02, s12, g2 = 1.0, 0.0, 0.0, 0.0
-    s00 += lam
-    s11 += lam
-    s22 += lam
-    c00 = s11 * s22 - s12 * s12
-    c01 = s02 * s12 - s01 * s22
-    c02 = s01 * s12 - s02 * s11
-    c11 = s00 * s22 - s02 * s02
-    c12 = s01 * s02 - s00 * s12
-    c22 = s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
-    if det == 0:
-        det = 2.2250738585072014e-308
-    step[0] = -(c00 * g0 + c01 * g1 + c02 * g2) / det
-    step[1] = -(c01 * g0 + c11 * g1 + c12 * g2) / det
-    step[2] = -(c02 * g0 + c12 * g1 + c22 * g2) / det
-    return g0, g1, g2
-
-
-@numba.njit(cache=True)
-def _lm_rows(
-    a, owner, R, x0, lo, hi, bounded, max_iter, xtol, ftol, gtol, xs, costs, status, nit
-):  # pragma: no cover - compiled
-    """The Levenberg–Marquardt loop of every row (module docstring), written into
-    xs (B, 3), costs (B,), status (B,) and nit (B,)."""
-    M = R.shape[1]
-    r, u = np.empty(M), np.empty((M, 3))
-    rn, un = np.empty(M), np.empty((M, 3))
-    x, xn, step = np.empty(3), np.empty(3), np.empty(3)
-    free = np.ones(3, dtype=np.bool_)
-    for b in range(R.shape[0]):
-        ab, rho = a[owner[b]], R[b]
-        x[:] = x0[b]
-        cost = _residuals(x, ab, rho, r, u)
-        st, it = np.int8(4 if cost == 0 else 0), 0
-        lam, nu = 1e-3, 2.0
-        while st == 0 and it < max_iter:
-            it += 1
-            if bounded:
-                _free_coordinates(x, r, u, lo[b], hi[b], free)
-            g0, g1, g2 = _damped_step(r, u, lam, step, free)
-            small_g = max(abs(g0), abs(g1), abs(g2)) <= gtol
-            for k in range(3):
-                xn[k] = x[k] + step[k]
-                if bounded:
-                    xn[k] = min(max(xn[k], lo[b, k]), hi[b, k])
-                    step[k] = xn[k] - x[k]
-            cn = _residuals(xn, ab, rho, rn, un)
-            # predicted reduction of the damped model: ½ δᵀ(λδ − g)
-            pred = 0.5 * (
-                step[0] * (lam * step[0] - g0)
-                + step[1] * (lam * step[1] - g1)
-                + step[2] * (lam * step[2] - g2)
-            )
-            actual = cost - cn
-            ratio = actual / pred if pred > 0 else -1.0
-            ok = ratio > 0 and math.isfinite(cn)
-            snorm = math.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2])
-            xnorm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-            small_x = snorm <= xtol * (xnorm + xtol)
-            small_f = ok and actual <= ftol * cost and pred <= ftol * cost
-            # accept / reject with Nielsen's damping update
-            if ok:
-                x[:], r[:], u[:, :] = xn, rn, un
-                cost = cn
-                lam *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
-                nu = 2.0
-            else:
-                lam *= nu
-                nu *= 2.0
-            if small_g:
-                st = 1
-            elif small_f:
-                st = 2
-            elif small_x:
-                st = 3
-            if ok and cn == 0:
-                st = 4
-            # a damping that overflows means no descent direction is left: stationary point
-            if st == 0 and not math.isfinite(lam * 1e3):
-                st = 1
-        xs[b] = x
-        costs[b], status[b], nit[b] = cost, st, it

@@ -13,7 +13,8 @@ Presets (:meth:`System.preset`):
   window (192 samples at 192 kHz) 29 ms in, the strongest arrival (peak pick), least
   squares started inside the room's box and not kept in the room.
 - ``"recommended"``: the 20 ms first-path receiver (a window of 20 ms that closes with the
-  chirp) and least squares kept in the room.
+  chirp) and positioning that rejects echoes (:mod:`simulation.robust`), kept in the floor
+  plan.
 
 A system is also a TOML table (:meth:`System.from_toml`, :meth:`System.to_dict`):
 
@@ -29,16 +30,15 @@ A system is also a TOML table (:meth:`System.from_toml`, :meth:`System.to_dict`)
     method = "ls"
     keep_in_room = true
 
-**Reach** (docs/model.md, "Reach of a signal design"). The receiver samples the window
-t_n = t_wake + n/fs, n = 0 … N − 1, whose span is W = (N − 1)/fs. A path with delay τ puts
-chirp time u = t_n − τ at sample n, and the chirp is on for 0 ≤ u ≤ T; the window holds the
-part of the chirp with u ∈ [t_wake − τ, t_wake + W − τ] ∩ [0, T]. The receiver sees a path
-when the window holds at least D = min(W, T, :data:`MIN_OVERLAP`) of its chirp, that is
-for τ ∈ [τ_min, τ_max] (:func:`simulation.receiver.delay_span`); at the speed of sound c the
-**reach** is c·τ_max and the **near limit** c·τ_min. The paper's design reaches
-c·29 ms = 9.95 m at 20 °C and has no near limit. A window may be longer than the chirp; a
-room refuses one that closes after the chirp's end plus its longest flight
-(:meth:`System.check_room`).
+**Reach** (docs/model.md, "The system: signal, receiver, positioning"). The receiver
+samples the window t_n = t_wake + n/fs, n = 0 … N − 1, whose span is W = (N − 1)/fs. A
+path with delay τ puts chirp time u = t_n − τ at sample n, and the chirp is on for
+0 ≤ u ≤ T. The receiver sees a path when the window holds at least
+D = min(W, T, :data:`MIN_OVERLAP`) of its chirp, that is for τ ∈ [τ_min, τ_max]
+(:func:`simulation.receiver.delay_span`); at the speed of sound c the **reach** is c·τ_max
+and the **near limit** c·τ_min. The paper's design reaches c·29 ms = 9.95 m at 20 °C and
+has no near limit. A window may be longer than the chirp; a room refuses one that closes
+after the chirp's end plus its longest flight (:meth:`System.check_room`).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ import numpy as np
 
 from simulation import checks
 from simulation.chirp import Chirp
-from simulation.positioning import METHODS, locate
+from simulation.positioning import FALSE_ALARM, METHODS, RANGE_SIGMA, locate
 from simulation.receiver import MIN_OVERLAP, Receiver, delay_span, dsp_form, signal_chain
 
 __all__ = ["MIN_OVERLAP", "PRESETS", "Positioning", "System", "as_system", "closing_window"]
@@ -67,34 +67,50 @@ MAX_ITERATIONS = 100_000
 class Positioning:
     """How the installation turns ranges into positions (docs/model.md, "Positioning").
 
-    method : ``"ls"``, least squares on every heard range (the paper's).
-    keep_in_room : keep every iterate inside the room's box (a system that knows its
-        room); False: unbounded iterates, started inside the box (the paper's).
+    method : ``"ls"``, least squares on every heard range (the paper's), or ``"robust"``,
+        least squares on the anchors whose ranges agree to ``range_sigma``, the others
+        rejected as echoes (:mod:`simulation.robust`).
+    keep_in_room : keep every iterate inside the room: its box and its floor plan (a
+        system that knows its room); False: unbounded iterates, started inside the box
+        (the paper's).
     max_iter : the solver's iteration limit per fix.
+    range_sigma : the receiver's range σ (m) the robust method tests the residuals at.
+    false_alarm : the probability that the robust method's test rejects a consistent set.
     """
 
     method: str = "ls"
     keep_in_room: bool = False
     max_iter: int = 100
+    range_sigma: float = RANGE_SIGMA
+    false_alarm: float = FALSE_ALARM
 
     def __post_init__(self) -> None:
         checks.choice("method", self.method, METHODS)
         checks.flag("keep_in_room", self.keep_in_room)
         checks.count("max_iter", self.max_iter, low=1, high=MAX_ITERATIONS)
+        checks.real("range_sigma", self.range_sigma, low=0.0, high=10.0, low_open=True,
+                    unit="m")  # fmt: skip
+        checks.real("false_alarm", self.false_alarm, low=0.0, high=0.5, low_open=True)
 
     def locate(self, room, anchors, ranges, *, full_output: bool = False):
         """Positions (..., P, 3) m (or a :class:`simulation.PositionFix`) from ranges
         (..., P, M) m of the anchors (M, 3) or layouts (L, M, 3), as this positioning
-        solves them in ``room`` (started inside its box; kept in it with
-        ``keep_in_room``)."""
+        solves them in ``room`` (started inside its box; kept in its box and floor plan
+        with ``keep_in_room``)."""
         region = (np.zeros(3), np.asarray(room.size, dtype=float))
-        return locate(anchors, ranges, region=region, bounded=self.keep_in_room,
-                      max_iter=self.max_iter, full_output=full_output)  # fmt: skip
+        poly = None if (room.is_shoebox or not self.keep_in_room) else room.floor_corners
+        return locate(anchors, ranges, method=self.method, region=region,
+                      bounded=self.keep_in_room, floor_plan=poly, max_iter=self.max_iter,
+                      range_sigma=self.range_sigma, false_alarm=self.false_alarm,
+                      full_output=full_output)  # fmt: skip
 
     def describe(self) -> str:
         """One line: the method and whether positions are kept in the room."""
         kept = "kept in the room" if self.keep_in_room else "not kept in the room"
-        return f"least squares, {kept}"
+        if self.method == "ls":
+            return f"least squares, {kept}"
+        return (f"robust least squares (echoes rejected at range sigma {self.range_sigma:g} m), "
+                f"{kept}")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -150,10 +166,11 @@ class System:
 
     @classmethod
     def recommended(cls) -> System:
-        """The 20 ms first-path receiver with positions kept in the room (module docstring)."""
+        """The 20 ms first-path receiver with echoes rejected and positions kept in the
+        floor plan (module docstring)."""
         base = closing_window(cls(), 20e-3, "first-path")
-        return dataclasses.replace(base, positioning=Positioning(keep_in_room=True),
-                                   name="recommended")  # fmt: skip
+        positioning = Positioning(method="robust", keep_in_room=True)
+        return dataclasses.replace(base, positioning=positioning, name="recommended")
 
     # -- reach -------------------------------------------------------------------------------
     @property

@@ -275,6 +275,12 @@ def _print_result(res, args) -> None:
     search = res.settings.search_result
     if search.get("resumed"):
         print(f"search: resumed from {args.checkpoint}.search.json")
+    cover = search.get("coverage")
+    if cover:
+        print(f"coverage selection: {100 * cover['covered']:.1f} % of the nodes see "
+              f"{cover['k']} anchors in line of sight and reach (bound "
+              f"{100 * cover['bound']:.1f} %, {cover['status']}; greedy "
+              f"{100 * cover['greedy']:.1f} %): the first search chain's start")  # fmt: skip
     for s in res.initial:
         table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
         print(f"  initial {s.name:<12} swarm cost {s.cost:.4g}{table}")
@@ -301,33 +307,40 @@ def _print_result(res, args) -> None:
     print("anchors (m):")
     for a in res.anchors:
         print(f"  {a[0]:7.3f} {a[1]:7.3f} {a[2]:7.3f}")
-    _print_validation(res.validation)
+    _print_validation(res.validation, res.system.positioning.method == "robust")
     _print_phases(res)
 
 
-def _print_validation(v) -> None:
+def _print_validation(v, robust: bool = False) -> None:
     """The validation's summary lines, the field check first: what an installation gets."""
     if v is None:
         return
     if v.field is not None:
         f = v.field
         print(f"field ({f.draws} draws of {f.tags_per_draw} random tags, anchors mounted "
-              f"within {100 * f.tolerance_m:g} cm): " + _stats(f))  # fmt: skip
+              f"within {100 * f.tolerance_m:g} cm): " + _stats(f, robust))  # fmt: skip
     print(f"validation, {v.realizations} realizations at the {len(v.per_node['rmse'])} nodes: "
-          + _stats(v))  # fmt: skip
+          + _stats(v, robust))  # fmt: skip
+    if v.covered == v.covered:
+        print(f"  line of sight: {100 * v.covered:.1f} % of the nodes see {v.coverage_k} or "
+              "more anchors in line of sight and reach")  # fmt: skip
     if v.held_out is not None:
         for d, what in ((v.held_out.grid, "held-out grid"), (v.held_out.random, "random points")):
-            print(f"  {what} ({d.nodes} nodes): " + _stats(d))
+            print(f"  {what} ({d.nodes} nodes): " + _stats(d, robust))
     if v.mounting is not None:
         m = v.mounting
-        print(f"  mounting error <= {100 * m.tolerance_m:g} cm ({m.draws} draws): " + _stats(m))
+        print(f"  mounting error <= {100 * m.tolerance_m:g} cm ({m.draws} draws): "
+              + _stats(m, robust))  # fmt: skip
 
 
-def _stats(s) -> str:
-    """ "median … m, mean … m, P95 … m, sigma … m" and the availability of a summary: what
-    a user's tags see first, the paper's σ after."""
-    return (f"median {s.median:.3f} m, mean {s.mean:.3f} m, P95 {s.p95:.3f} m, "
-            f"sigma {s.std:.3f} m" + availability_note({"availability": s.availability}))  # fmt: skip
+def _stats(s, robust: bool = False) -> str:
+    """ "median … m, mean … m, P95 … m[, verified … %], sigma … m" and the availability of
+    a summary: what a user's tags see first (the share of verified fixes for a system that
+    verifies them, ``robust``), the paper's σ after."""
+    verified = f", verified {100 * s.verified:.1f} %" if robust else ""
+    return (f"median {s.median:.3f} m, mean {s.mean:.3f} m, P95 {s.p95:.3f} m{verified}, "
+            f"sigma {s.std:.3f} m"
+            + availability_note({"availability": s.availability}))  # fmt: skip
 
 
 def _print_phases(res) -> None:

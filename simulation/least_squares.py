@@ -1,0 +1,227 @@
+"""The compiled damped Gauss–Newton (Levenberg–Marquardt) solve of one position from
+ranges, shared by the least-squares and the robust positioning (docs/model.md,
+"Positioning").
+
+For ranges ρ (M,) of anchors a (M, 3) (NaN: not heard, left out of the sums), minimize
+F(x) = ½ Σ_j (‖x − a_j‖ − ρ_j)² with Nielsen's damping update, explicit 3 × 3 solves and
+a fixed iteration limit. Bounded (``bounded``): a coordinate at a face of the box [lo, hi]
+whose descent direction points out of it is held there while the others take the damped
+step of their own block (an active set); every step is projected onto the box and, with a
+floor plan (``poly`` (K, 2), K ≥ 3 corners, counter-clockwise), onto the floor plan: a
+position in a cut-out corner of an L-shaped room is not in the room.
+
+Statuses (modelled on scipy ``least_squares``): 1 gradient small, 2 cost change small,
+3 step small, 4 zero residual, 0 iteration limit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True)
+def residuals(x, a, rho, r, u):  # pragma: no cover - compiled
+    """Residuals r (M,) and unit vectors u (M, 3) from the anchors a (M, 3) to the point
+    x (3,) for ranges rho (M,); returns ½Σr²."""
+    cost = 0.0
+    for j in range(a.shape[0]):
+        if rho[j] != rho[j]:  # NaN: not heard, no residual
+            r[j] = 0.0
+            u[j, 0] = u[j, 1] = u[j, 2] = 0.0
+            continue
+        d0, d1, d2 = x[0] - a[j, 0], x[1] - a[j, 1], x[2] - a[j, 2]
+        dist = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        inv = 1.0 / dist if dist > 0 else 1.0
+        r[j] = dist - rho[j]
+        u[j, 0], u[j, 1], u[j, 2] = d0 * inv, d1 * inv, d2 * inv
+        cost += r[j] * r[j]
+    return 0.5 * cost
+
+
+@numba.njit(cache=True)
+def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
+    """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
+    because the descent direction −Jᵀr points out of the box there."""
+    for k in range(3):
+        g = 0.0
+        for j in range(r.shape[0]):
+            g += r[j] * u[j, k]
+        free[k] = not ((x[k] <= lo[k] and g > 0) or (x[k] >= hi[k] and g < 0))
+
+
+@numba.njit(cache=True)
+def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
+    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
+    (a held one, ``free[k]`` False, gets δ_k = 0); returns (g0, g1, g2) = Jᵀr with the held
+    coordinates' entries zero (the projected gradient)."""
+    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
+    for j in range(r.shape[0]):
+        u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
+        s00 += u0 * u0
+        s01 += u0 * u1
+        s02 += u0 * u2
+        s11 += u1 * u1
+        s12 += u1 * u2
+        s22 += u2 * u2
+        g0 += r[j] * u0
+        g1 += r[j] * u1
+        g2 += r[j] * u2
+    # a held coordinate leaves the system: its row and column become the identity's
+    if not free[0]:
+        s00, s01, s02, g0 = 1.0, 0.0, 0.0, 0.0
+    if not free[1]:
+        s11, s01, s12, g1 = 1.0, 0.0, 0.0, 0.0
+    if not free[2]:
+        s22, s02, s12, g2 = 1.0, 0.0, 0.0, 0.0
+    s00 += lam
+    s11 += lam
+    s22 += lam
+    c00 = s11 * s22 - s12 * s12
+    c01 = s02 * s12 - s01 * s22
+    c02 = s01 * s12 - s02 * s11
+    c11 = s00 * s22 - s02 * s02
+    c12 = s01 * s02 - s00 * s12
+    c22 = s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    if det == 0:
+        det = 2.2250738585072014e-308
+    step[0] = -(c00 * g0 + c01 * g1 + c02 * g2) / det
+    step[1] = -(c01 * g0 + c11 * g1 + c12 * g2) / det
+    step[2] = -(c02 * g0 + c12 * g1 + c22 * g2) / det
+    return g0, g1, g2
+
+
+@numba.njit(cache=True)
+def lm_rows(
+    a, owner, R, x0, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, xs, costs, status, nit
+):  # pragma: no cover - compiled
+    """The Levenberg–Marquardt solve (:func:`lm_solve`) of every row: ranges R (B, M),
+    layouts a (L, M, 3) with row b's ``owner[b]``, starts x0 (B, 3), bounds lo, hi (B, 3);
+    written into xs (B, 3), costs (B,), status (B,) and nit (B,)."""
+    x = np.empty(3)
+    work = scratch(R.shape[1])
+    for b in range(R.shape[0]):
+        x[:] = x0[b]
+        cost, st, it = lm_solve(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly, max_iter,
+                                xtol, ftol, gtol, *work)  # fmt: skip
+        xs[b] = x
+        costs[b], status[b], nit[b] = cost, st, it
+
+
+@numba.njit(cache=True)
+def scratch(M):  # pragma: no cover - compiled
+    """The scratch arrays of :func:`lm_solve` for M anchors: r, u, rn, un, xn, step, free."""
+    return (np.empty(M), np.empty((M, 3)), np.empty(M), np.empty((M, 3)), np.empty(3),
+            np.empty(3), np.ones(3, dtype=np.bool_))  # fmt: skip
+
+
+@numba.njit(cache=True)
+def lm_solve(
+    ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step, free
+):  # pragma: no cover - compiled
+    """Solve one position in place in x (3,) from ranges rho (M,) of anchors ab (M, 3)
+    (module docstring; r … free: :func:`scratch`); returns (cost ½Σr², status,
+    iterations)."""
+    free[:] = True
+    if bounded and poly.shape[0] >= 3:
+        into_floor_plan(x, poly)
+    cost = residuals(x, ab, rho, r, u)
+    st, it = np.int8(4 if cost == 0 else 0), 0
+    lam, nu = 1e-3, 2.0
+    while st == 0 and it < max_iter:
+        it += 1
+        if bounded:
+            _free_coordinates(x, r, u, lo, hi, free)
+        g0, g1, g2 = _damped_step(r, u, lam, step, free)
+        small_g = max(abs(g0), abs(g1), abs(g2)) <= gtol
+        for k in range(3):
+            xn[k] = x[k] + step[k]
+            if bounded:
+                xn[k] = min(max(xn[k], lo[k]), hi[k])
+        if bounded and poly.shape[0] >= 3:
+            into_floor_plan(xn, poly)
+        if bounded:
+            for k in range(3):
+                step[k] = xn[k] - x[k]
+        cn = residuals(xn, ab, rho, rn, un)
+        # predicted reduction of the damped model: ½ δᵀ(λδ − g)
+        pred = 0.5 * (
+            step[0] * (lam * step[0] - g0)
+            + step[1] * (lam * step[1] - g1)
+            + step[2] * (lam * step[2] - g2)
+        )
+        actual = cost - cn
+        ratio = actual / pred if pred > 0 else -1.0
+        ok = ratio > 0 and math.isfinite(cn)
+        snorm = math.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2])
+        xnorm = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        small_x = snorm <= xtol * (xnorm + xtol)
+        small_f = ok and actual <= ftol * cost and pred <= ftol * cost
+        # accept / reject with Nielsen's damping update
+        if ok:
+            x[:], r[:], u[:, :] = xn, rn, un
+            cost = cn
+            lam *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
+            nu = 2.0
+        else:
+            lam *= nu
+            nu *= 2.0
+        if small_g:
+            st = 1
+        elif small_f:
+            st = 2
+        elif small_x:
+            st = 3
+        if ok and cn == 0:
+            st = 4
+        # a damping that overflows means no descent direction is left: stationary point
+        if st == 0 and not math.isfinite(lam * 1e3):
+            st = 1
+    return cost, st, it
+
+
+@numba.njit(cache=True)
+def inside_floor_plan(x, y, poly) -> bool:  # pragma: no cover - compiled
+    """Whether (x, y) lies inside the polygon ``poly`` (K, 2) (even-odd rule; a point on
+    an edge counts as inside)."""
+    K = poly.shape[0]
+    inside = False
+    for i in range(K):
+        x0, y0 = poly[i, 0], poly[i, 1]
+        x1, y1 = poly[(i + 1) % K, 0], poly[(i + 1) % K, 1]
+        # on the edge: inside
+        dx, dy = x1 - x0, y1 - y0
+        cross = (x - x0) * dy - (y - y0) * dx
+        if (
+            abs(cross) <= 1e-12 * (abs(dx) + abs(dy))
+            and min(x0, x1) - 1e-12 <= x <= max(x0, x1) + 1e-12
+            and min(y0, y1) - 1e-12 <= y <= max(y0, y1) + 1e-12
+        ):
+            return True
+        if (y0 > y) != (y1 > y):
+            if x < x0 + (y - y0) * dx / dy:
+                inside = not inside
+    return inside
+
+
+@numba.njit(cache=True)
+def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
+    """In place: a point p (3,) whose (x, y) lies outside the floor plan ``poly`` (K, 2)
+    moves to the nearest point of its boundary (z unchanged)."""
+    if inside_floor_plan(p[0], p[1], poly):
+        return
+    K = poly.shape[0]
+    best, bx, by = math.inf, p[0], p[1]
+    for i in range(K):
+        x0, y0 = poly[i, 0], poly[i, 1]
+        dx, dy = poly[(i + 1) % K, 0] - x0, poly[(i + 1) % K, 1] - y0
+        L2 = dx * dx + dy * dy
+        t = 0.0 if L2 == 0 else min(max(((p[0] - x0) * dx + (p[1] - y0) * dy) / L2, 0.0), 1.0)
+        qx, qy = x0 + t * dx, y0 + t * dy
+        d = (p[0] - qx) ** 2 + (p[1] - qy) ** 2
+        if d < best:
+            best, bx, by = d, qx, qy
+    p[0], p[1] = bx, by
