@@ -457,9 +457,11 @@ def coverage_map(
     anchor_color: str = ANCHOR_COLOR,
     dpi: float = 100,
     system=None,
+    k: int = 4,
 ) -> Figure:
     """Coverage: the number of anchors heard with ``system`` (default the paper's;
-    :func:`analysis.coverage.coverage`) on
+    :func:`analysis.coverage.coverage`; red hatching and the red line where fewer than
+    ``k`` are heard: 4, no fix; 5, an echo cannot be found) on
     horizontal slices at ``heights`` (default: the room's mid height), one discrete colour
     per count; red hatching where fewer than 4 are heard (no position fix); anchors
     numbered as the rows of ``anchors`` (M, 3), keep-outs and tag zones as in
@@ -493,12 +495,12 @@ def coverage_map(
         pts = np.stack(np.meshgrid(u, v, [z], indexing="ij"), axis=-1).reshape(-1, 3)
         count = _coverage(room, anchors, pts, system=system).reshape(nu, nv)
         inside = room.contains(pts).reshape(nu, nv)
-        short = max(short, float(np.mean(count[inside] < 4)) if inside.any() else 0.0)
+        short = max(short, float(np.mean(count[inside] < k)) if inside.any() else 0.0)
         extent = (0.0, L[0], 0.0, L[1])
         im = ax.imshow(count.T, origin="lower", extent=extent, cmap=cmap, norm=norm,
                        interpolation="nearest", aspect="equal")  # fmt: skip
         _blank_outside(ax, room, pts, (nu, nv), extent)
-        low = (count < 4) & inside
+        low = (count < k) & inside
         if np.any(low):
             ax.contourf(u, v, low.T.astype(float), levels=[0.5, 1.5], colors="none",
                         hatches=["////"], zorder=1.8)  # fmt: skip
@@ -515,7 +517,7 @@ def coverage_map(
         ax.set_visible(False)
     cb = fig.colorbar(im, ax=list(axs[:n]), shrink=0.9, ticks=range(M + 1))
     cb.set_label("anchors heard")
-    note = f"; hatched: < 4 heard (≤ {100 * short:.1f} % of a slice)" if short else ""
+    note = f"; hatched: < {k} heard (≤ {100 * short:.1f} % of a slice)" if short else ""
     reach = as_system(system).reach(room.speed_of_sound)
     fig.suptitle(f"Anchors heard, M = {M}, reach {reach:.2f} m{note}", fontsize=10)
     return fig

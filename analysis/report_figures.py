@@ -80,14 +80,23 @@ def _coverage(figs: _Figures) -> None:
         + (" and above the receiver's detection threshold" if ctx.system.receiver.false_alarm
            is not None else "")
         + f", reach {ctx.system.reach(ctx.room.speed_of_sound):.2f} m) on horizontal slices "
-        "at the node heights; a position needs 4. Red hatching: fewer than 4 heard, no fix."
-        + _regions_note(ctx),
+        f"at the node heights; a position needs 4{_k_note(ctx)}. Red hatching and line: fewer "
+        f"than {_k(ctx)} heard." + _regions_note(ctx),
         lambda: F.coverage_map(
             ctx.room, best.anchors, heights=heights, anchor_color=ctx.colors[best.name],
-            dpi=figs.dpi, system=ctx.system,
+            dpi=figs.dpi, system=ctx.system, k=_k(ctx),
         ),
         section="layout",
     )  # fmt: skip
+
+
+def _k(ctx: Context) -> int:
+    """The anchors a node needs with the plan's system: 5 where it rejects echoes, else 4."""
+    return 5 if ctx.system.positioning.method == "robust" else 4
+
+
+def _k_note(ctx: Context) -> str:
+    return ", and 5 for this system to find an echo among them" if _k(ctx) == 5 else ""
 
 
 def _peb(figs: _Figures) -> None:

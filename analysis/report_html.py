@@ -195,28 +195,36 @@ def _head(ctx: Context) -> list[str]:
 
 
 def _headline(ctx: Context) -> list[str]:
-    """Cards: σ / mean / P95 and mean PEB of the layout, σ of each comparison layout."""
+    """Cards: the field's median / mean / P95 and share of verified fixes, then σ, the
+    layout's figures at the nodes, the line-of-sight coverage and mean PEB, σ of each
+    comparison layout."""
     best = ctx.best
     cards = []
     field = ((ctx.result or {}).get("validation") or {}).get("field")
+    robust = ctx.system.positioning.method == "robust"
     if field:  # first: what the installation delivers where the tags go
         what = f"tags anywhere, anchors within {100 * field['tolerance_m']:g} cm"
         cards += [
-            (f"{_num(field['std'])} m", f"field σ ({what})"),
+            (f"{_num(field.get('median'))} m", f"field median error ({what})"),
             (f"{_num(field['mean'])} m", "field mean error"),
             (f"{_num(field['p95'])} m", "field P95 error"),
         ]
+        if robust:
+            cards.append((_percent(field.get("verified")), "field fixes verified (≥ 5 agree)"))
+        cards.append((f"{_num(field['std'])} m", "field σ (the paper's figure)"))
     if best.sim is not None:
         st = best.sim.stats
         cards += [
-            (f"{_num(st['std'])} m", f"σ of the error ({best.name})"),
+            (f"{_num(st.get('median'))} m", f"median error ({best.name}, at the nodes)"),
             (f"{_num(st['mean'])} m", "mean error"),
             (f"{_num(st['p95'])} m", "P95 error"),
+            (f"{_num(st['std'])} m", "σ of the error"),
             (_percent(st.get("availability")), "availability (share with a fix)"),
         ]
+    k = 5 if robust else 4
+    share = covered_share(ctx.room, best.anchors, ctx.nodes, system=ctx.system, k=k)
+    cards.append((_percent(share), f"nodes seeing ≥ {k} anchors (line of sight, reach)"))
     cards.append((f"{_num(_summary(best.peb)['mean'])} m", "mean PEB"))
-    share = covered_share(ctx.room, best.anchors, ctx.nodes, system=ctx.system)
-    cards.append((_percent(share), "nodes hearing ≥ 4 anchors (line of sight, reach)"))
     for e in ctx.layouts[1:]:
         if e.role in ("comparison", "reference") and e.sim is not None:
             cards.append((f"{_num(e.sim.stats['std'])} m", f"σ of the {e.name} layout"))

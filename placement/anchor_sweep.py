@@ -28,8 +28,10 @@ from simulation.room import Room, room_or_default
 class SweepRow:
     """One anchor count: M, the validated σ, mean and P95 (m, over the fixes) and the
     availability at the evaluation nodes, the held-out and mounting-error σ / P95 (m) and
-    availabilities, the field σ / mean / P95 (m; random tags and mounting error together)
-    (NaN when not validated), the layout (M, 3) and the seconds its plan took."""
+    availabilities, the field σ / mean / P95 / median (m; random tags and mounting error
+    together) and its share of verified fixes, the share of the nodes that see
+    ``coverage_k`` anchors in line of sight and reach (``covered``) (NaN when not
+    validated), the layout (M, 3) and the seconds its plan took."""
 
     M: int
     std: float
@@ -47,6 +49,10 @@ class SweepRow:
     field_std: float = math.nan
     field_mean: float = math.nan
     field_p95: float = math.nan
+    field_median: float = math.nan
+    field_verified: float = math.nan
+    covered: float = math.nan
+    coverage_k: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         """The row as plain JSON types (anchors as nested lists)."""
@@ -58,9 +64,9 @@ class SweepRow:
 @dataclass(frozen=True)
 class SweepResult:
     """Result of :func:`sweep`: rows (one per M, increasing), recommended the smallest M
-    whose validated availability ≥ ``target_availability`` and P95 ≤ ``target_p95`` (when
-    given; None when no M does), the room, the settings and the seconds of the shared
-    table and of the whole sweep."""
+    whose validated availability ≥ ``target_availability``, line-of-sight coverage ≥
+    ``target_coverage`` and P95 ≤ ``target_p95`` (when given; None when no M does), the
+    room, the settings and the seconds of the shared table and of the whole sweep."""
 
     rows: tuple[SweepRow, ...]
     recommended: int | None
@@ -69,6 +75,7 @@ class SweepResult:
     settings: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     target_availability: float = 0.99
+    target_coverage: float = 0.95
 
     def to_dict(self) -> dict[str, Any]:
         """The sweep as plain JSON types (``kind`` "sweep")."""
@@ -78,6 +85,7 @@ class SweepResult:
             "recommended": self.recommended,
             "target_p95": self.target_p95,
             "target_availability": self.target_availability,
+            "target_coverage": self.target_coverage,
             "room": self.room.to_dict(),
             "settings": self.settings,
             "timings": self.timings,
@@ -124,15 +132,25 @@ def _row(M: int, res, seconds: float) -> SweepRow:
         field_std=field.get("std", nan),
         field_mean=field.get("mean", nan),
         field_p95=field.get("p95", nan),
+        field_median=field.get("median", nan),
+        field_verified=field.get("verified", nan),
+        covered=v.get("covered", nan),
+        coverage_k=int(v.get("coverage_k", 0)),
     )
 
 
-def recommend(rows, target_p95: float | None, target_availability: float) -> int | None:
-    """The smallest M of ``rows`` whose availability ≥ ``target_availability`` and, with a
-    ``target_p95``, whose P95 ≤ it; None when none does."""
+def recommend(
+    rows, target_p95: float | None, target_availability: float, target_coverage: float = 0.0
+) -> int | None:
+    """The smallest M of ``rows`` whose availability ≥ ``target_availability``, whose
+    line-of-sight coverage ≥ ``target_coverage`` and, with a ``target_p95``, whose P95 ≤ it;
+    None when none does."""
     for r in rows:
-        if ties.reaches(r.availability, target_availability) and (
-            target_p95 is None or ties.meets(r.p95, target_p95)
+        covered = getattr(r, "covered", math.nan)
+        if (
+            ties.reaches(r.availability, target_availability)
+            and (target_coverage <= 0 or ties.reaches(covered, target_coverage))
+            and (target_p95 is None or ties.meets(r.p95, target_p95))
         ):
             return r.M
     return None
@@ -162,6 +180,7 @@ def sweep(
     system=None,
     target_p95: float | None = None,
     target_availability: float = 0.99,
+    target_coverage: float = 0.95,
     on_row=None,
     cost="variance",
     initial="auto",
@@ -179,8 +198,10 @@ def sweep(
     keywords from ``cost`` on are its own; every M uses the same ``rng``) on one shared
     range table, built as a plan builds it, so that the row for M is the plan
     ``seed_then_pso(room, M, ...)``; and recommend the smallest M whose validated
-    availability reaches ``target_availability`` (a share in (0, 1]) and whose validated
-    P95 (m) ≤ ``target_p95`` (when given).
+    availability reaches ``target_availability`` (a share in (0, 1]), whose share of nodes
+    that see k anchors in line of sight and reach reaches ``target_coverage`` (k = 5 for a
+    system that rejects echoes, 4 otherwise; 0 turns it off) and whose validated P95 (m) ≤
+    ``target_p95`` (when given).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     system : the positioning system (:class:`simulation.System`, a preset's name or None:
@@ -198,6 +219,7 @@ def sweep(
     target_availability = checks.real(
         "target_availability", target_availability, low=0.0, high=1.0, low_open=True
     )
+    target_coverage = checks.real("target_coverage", target_coverage, low=0.0, high=1.0)
     kw = {"system": system, "cost": cost, "initial": initial, "search": search, "swarm": swarm,
           "finalists": finalists, "validation": validation, "effort": effort, "nodes": nodes,
           "executor": executor, "progress": progress}  # fmt: skip
@@ -217,7 +239,7 @@ def sweep(
             on_row(planner.M, rows[-1])
     return SweepResult(
         rows=tuple(rows),
-        recommended=recommend(rows, target_p95, target_availability),
+        recommended=recommend(rows, target_p95, target_availability, target_coverage),
         target_p95=target_p95,
         room=room,
         settings={
@@ -229,4 +251,5 @@ def sweep(
         },
         timings={"table": t_table, "total": time.perf_counter() - t0},
         target_availability=target_availability,
+        target_coverage=target_coverage,
     )

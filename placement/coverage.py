@@ -37,6 +37,16 @@ from simulation import checks
 
 #: the anchors in line of sight a node needs for the robust positioning to find one echo
 K_LINE_OF_SIGHT = 5
+#: the anchors a least-squares fix needs
+K_FIX = 4
+
+
+def coverage_k(system) -> int:
+    """The anchors in line of sight a node needs with ``system``: 5 where its positioning
+    rejects echoes (enough to find one), 4 otherwise (a fix)."""
+    return K_LINE_OF_SIGHT if system.positioning.method == "robust" else K_FIX
+
+
 #: seconds the integer program may take
 TIME_LIMIT = 20.0
 
@@ -106,9 +116,7 @@ def greedy(V: np.ndarray, M: int, k: int, groups=()) -> np.ndarray:
     return np.sort(np.asarray(chosen))
 
 
-def select_coverage(
-    V, M: int, k: int = K_LINE_OF_SIGHT, time_limit: float = TIME_LIMIT, groups=()
-):
+def select_coverage(V, M: int, k: int = K_LINE_OF_SIGHT, time_limit: float = TIME_LIMIT, groups=()):
     """The coverage selection (module docstring) of M candidates on the visibility V (P, N)
     bool, no group of ``groups`` (index arrays) holding all M: a
     :class:`CoverageSelection`, never worse than :func:`greedy`."""

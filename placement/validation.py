@@ -33,7 +33,7 @@ import numpy as np
 
 from analysis.coverage import covered_share
 from analysis.fim import DEFAULT_SIGMA, peb
-from placement.coverage import K_LINE_OF_SIGHT
+from placement.coverage import K_LINE_OF_SIGHT, coverage_k
 from placement.rangetable import check_mount_tolerance, mounted_points
 from placement.workers import run_calls
 from simulation import checks, streams
@@ -177,7 +177,7 @@ class FieldCheck(ErrorSummary):
 
 
 #: the per-node figures of the grid check
-PER_NODE_KEYS = ("availability", "rmse", "std", "dop", "dop_rms")
+PER_NODE_KEYS = ("availability", "rmse", "std", "dop", "dop_rms", "verified")
 
 
 @dataclass(frozen=True, eq=False)  # arrays: compare ``to_dict()``
@@ -408,7 +408,9 @@ def validate_layout(
     results = iter(run_calls(executor, flat, progress=progress))
     jobs = {name: [next(results) for _ in group] for name, group in calls.items()}
     grid = _grid_block(jobs["grid"], a, nodes, opt, seed, sigma)
-    grid["covered"] = covered_share(room, a, nodes, system=as_system(system), k=K_LINE_OF_SIGHT)
+    system = as_system(system)
+    grid["coverage_k"] = coverage_k(system)
+    grid["covered"] = covered_share(room, a, nodes, system=system, k=grid["coverage_k"])
     message = None
     if grid["availability"] < 1:
         message = (
@@ -469,6 +471,7 @@ def _grid_block(parts, a, nodes, opt: ValidationOptions, seed, sigma) -> dict[st
             "std": node_std(e),
             "dop": dop(e, range_errors),
             "dop_rms": dop_rms(e, range_errors),
+            "verified": np.mean(verified, axis=0),
         },
         "errors": e,
     }

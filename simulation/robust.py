@@ -47,8 +47,12 @@ QUALITY = {
 }
 #: anchors left out and solved again per dropping step (the largest deleted residuals)
 CANDIDATES = 2
-#: the most subsets the exhaustive search of step 4 solves for one fix
-SUBSET_BUDGET = 256
+#: the most subsets the exhaustive search of step 4 solves for one fix (8 anchors: every
+#: subset of 7 and 6, and 60 of the 56 + … of 5 before it gives up)
+SUBSET_BUDGET = 96
+#: the iterations of one subset's solve: from its linear solution a consistent subset
+#: converges in a few; one that does not is not consistent
+SUBSET_ITER = 30
 
 
 def thresholds(false_alarm: float, M: int) -> np.ndarray:
@@ -167,8 +171,8 @@ def _subsets(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ft
                 xt[:] = x
             for k in range(3):
                 xt[k] = min(max(xt[k], lo[k]), hi[k])
-            c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol,
-                                 gtol, *work)  # fmt: skip
+            c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                                 xtol, ftol, gtol, *work)  # fmt: skip
             iters += it
             Tk = 2.0 * c / (sigma * sigma)
             if Tk < best_T:

@@ -1,0 +1,164 @@
+"""Positioning that rejects echoes (simulation.robust): against an exhaustive reference on
+small cases, one echo found with 5 anchors, the quality of every fix, the floor plan as
+the bounds, bad input."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from simulation import Positioning, Room, locate
+from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, thresholds
+
+ANCHORS = np.array([[0, 0, 2.4], [8, 0, 2.4], [8, 4, 2.4], [0, 4, 2.4], [0, 0, 0.5],
+                    [8, 4, 0.5], [4, 0, 1.2], [4, 4, 1.8]], float)  # fmt: skip
+REGION = (np.zeros(3), np.array([8.0, 4.0, 2.4]))
+SIGMA = 0.01
+
+
+def _nodes(rng, n):
+    return rng.uniform([0.5, 0.5, 0.5], [7.5, 3.5, 2.0], (n, 3))
+
+
+def _exhaustive(a, rho, sigma=SIGMA, false_alarm=1e-3):
+    """The reference: the largest subset of the heard anchors that passes the χ² test,
+    the one with the smallest residual at that size, by solving every subset."""
+    thr = thresholds(false_alarm, len(a))
+    heard = [j for j in range(len(a)) if np.isfinite(rho[j])]
+    for size in range(len(heard), 4, -1):
+        best = None
+        for S in itertools.combinations(heard, size):
+            r = np.full(len(a), np.nan)
+            r[list(S)] = rho[list(S)]
+            fix = locate(a, r[None], region=REGION, bounded=True, full_output=True)
+            T = 2 * fix.cost[0] / sigma**2
+            if T <= thr[size - 3] and (best is None or T < best[0]):
+                best = (T, set(S), fix.x[0])
+        if best is not None:
+            return best
+    return None
+
+
+def test_it_finds_the_consistent_subset_the_exhaustive_search_finds():
+    """Up to three echoes among eight anchors (ranges 0.3–3 m too long, as an echo makes
+    them): the anchors kept are those of the exhaustive search, the fix is verified and
+    lies within centimetres of the node (positions kept in the room, as an installed
+    system keeps them: five anchors of this layout can leave a mirror position above the
+    ceiling)."""
+    rng = np.random.default_rng(1)
+    for trial in range(40):
+        x = _nodes(rng, 1)[0]
+        rho = np.linalg.norm(x - ANCHORS, axis=1) + SIGMA * rng.standard_normal(8)
+        echoes = rng.choice(8, size=trial % 4, replace=False)
+        rho[echoes] += rng.uniform(0.3, 3.0, len(echoes))
+        ref = _exhaustive(ANCHORS, rho)
+        fix = locate(ANCHORS, rho[None], method="robust", region=REGION, bounded=True,
+                     range_sigma=SIGMA, full_output=True)  # fmt: skip
+        assert ref is not None
+        assert set(np.flatnonzero(fix.used[0])) == ref[1], trial
+        assert fix.quality[0] == VERIFIED
+        assert np.linalg.norm(fix.x[0] - x) < 0.05
+        assert np.allclose(fix.x[0], ref[2], atol=1e-6)
+
+
+def test_one_echo_is_found_with_five_anchors_and_not_with_four():
+    rng = np.random.default_rng(2)
+    x = np.array([3.0, 2.0, 1.2])
+    for k in (5, 4):
+        a = ANCHORS[:k]
+        rho = np.linalg.norm(x - a, axis=1) + 0.002 * rng.standard_normal(k)
+        rho[1] += 1.5  # an echo
+        fix = locate(a, rho[None], method="robust", region=REGION, range_sigma=SIGMA,
+                     full_output=True)  # fmt: skip
+        if k == 5:  # the four others agree: the echo is dropped, the fix verified
+            assert not fix.used[0, 1] and fix.used[0].sum() == 4
+            assert fix.quality[0] == UNVERIFIED  # 4 anchors kept: no redundancy left
+            assert np.linalg.norm(fix.x[0] - x) < 0.02
+        else:  # no redundancy to tell the echo: unverified, and it shows in the error
+            assert fix.quality[0] == UNVERIFIED
+            assert np.linalg.norm(fix.x[0] - x) > 0.1
+
+
+def test_with_six_anchors_one_echo_leaves_a_verified_fix():
+    x = np.array([5.0, 1.0, 1.0])
+    rho = np.linalg.norm(x - ANCHORS[:6], axis=1)
+    rho[4] += 0.8
+    fix = locate(ANCHORS[:6], rho[None], method="robust", region=REGION, full_output=True)
+    assert fix.quality[0] == VERIFIED and not fix.used[0, 4]
+    assert np.linalg.norm(fix.x[0] - x) < 1e-6
+
+
+def test_no_consistent_subset_is_flagged():
+    """Ranges that no subset of 5 or more anchors agrees with: unverified, not verified."""
+    rng = np.random.default_rng(3)
+    rho = np.linalg.norm(np.array([4, 2, 1.0]) - ANCHORS, axis=1) + rng.uniform(0, 3, 8)
+    assert _exhaustive(ANCHORS, rho) is None
+    fix = locate(ANCHORS, rho[None], method="robust", region=REGION, full_output=True)
+    assert fix.quality[0] == UNVERIFIED
+
+
+def test_every_fix_has_a_quality_and_least_squares_verifies_nothing():
+    rng = np.random.default_rng(4)
+    x = _nodes(rng, 50)
+    rho = np.linalg.norm(x[:, None] - ANCHORS[None], axis=-1)
+    rho[:10, :5] = np.nan  # 3 heard: no fix
+    robust = locate(ANCHORS, rho, method="robust", region=REGION, full_output=True)
+    ls = locate(ANCHORS, rho, region=REGION, full_output=True)
+    assert np.all(robust.quality[:10] == NO_FIX) and np.all(ls.quality[:10] == NO_FIX)
+    assert np.all(robust.quality[10:] == VERIFIED) and np.all(ls.quality[10:] == UNVERIFIED)
+    assert np.array_equal(ls.used, np.isfinite(rho))
+    assert np.allclose(robust.x[10:], ls.x[10:], atol=1e-9)  # nothing to reject: least squares
+
+
+def test_the_robust_solver_equals_least_squares_without_echoes():
+    """Without echoes the test passes on every anchor and the fix is least squares'."""
+    rng = np.random.default_rng(5)
+    x = _nodes(rng, 200)
+    rho = np.linalg.norm(x[:, None] - ANCHORS[None], axis=-1) + 0.003 * rng.standard_normal(
+        (200, 8)
+    )
+    robust = locate(ANCHORS, rho, method="robust", region=REGION, full_output=True)
+    ls = locate(ANCHORS, rho, region=REGION, full_output=True)
+    kept_all = robust.used.all(axis=1)
+    assert kept_all.mean() > 0.99  # the test rejects at 1e-3 false alarm
+    assert np.allclose(robust.x[kept_all], ls.x[kept_all], atol=1e-9)
+
+
+def test_positions_kept_in_the_floor_plan_not_its_box():
+    """An L-shaped room: a fix kept in the room never lands in the missing corner."""
+    room = Room.from_corners([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], 3.0)
+    a = np.array([[0.03, 0.03, 2.9], [6.9, 0.03, 0.5], [6.9, 2.9, 2.9], [2.9, 5.9, 0.5],
+                  [0.03, 5.9, 2.9], [1.5, 0.03, 1.5]])  # fmt: skip
+    rng = np.random.default_rng(6)
+    x = np.array([[2.5, 3.5, 1.2]] * 300)  # near the inner corner
+    rho = np.linalg.norm(x[:, None] - a[None], axis=-1) + 0.5 * rng.standard_normal((300, 6))
+    rho = np.maximum(rho, 0.0)
+    kept = Positioning(keep_in_room=True).locate(room, a, rho)
+    free = locate(a, rho, region=(np.zeros(3), np.asarray(room.size)), bounded=True)
+
+    def in_plan(p):
+        return room.contains(np.c_[p[:, :2], np.full(len(p), 1.5)])
+
+    assert np.all(in_plan(kept))
+    assert not np.all(in_plan(free))  # the box alone lets some into the missing corner
+
+
+@pytest.mark.parametrize(
+    ("kw", "names"),
+    [({"method": "median"}, "method"), ({"method": "robust", "range_sigma": 0}, "range_sigma"),
+     ({"method": "robust", "range_sigma": -0.1}, "range_sigma"),
+     ({"method": "robust", "false_alarm": 0.7}, "false_alarm"),
+     ({"floor_plan": [[0, 0], [1, 1]]}, "floor_plan")],
+)  # fmt: skip
+def test_bad_input_names_the_argument(kw, names):
+    with pytest.raises(ValueError, match=names):
+        locate(ANCHORS, np.linalg.norm(ANCHORS - 1.0, axis=1)[None], region=REGION, **kw)
+
+
+def test_too_few_anchors_are_refused_and_a_bad_positioning_too():
+    with pytest.raises(ValueError, match="anchors"):
+        locate(ANCHORS[:2], np.ones((1, 2)), method="robust")
+    for kw, name in (({"method": "lms"}, "method"), ({"range_sigma": 0.0}, "range_sigma"),
+                     ({"false_alarm": 1.0}, "false_alarm")):  # fmt: skip
+        with pytest.raises(ValueError, match=name):
+            Positioning(**kw)
