@@ -325,18 +325,18 @@ class Room:
                 if fname in kw:
                     raise ValueError(f"room: give either {alias!r} or {fname!r}, not both")
                 kw[fname] = kw.pop(alias)
-        known = {f for f in cls.__dataclass_fields__} | {"height"}
-        unknown = [k for k in kw if k not in known]
-        if unknown:
-            raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
-        if isinstance(kw.get("mounting"), list):
-            kw["mounting"] = tuple(kw["mounting"])
         if "signal" in kw:
             raise ValueError(
                 "room: a [signal] table belongs to the system now: move its chirp keys (f0, f1, "
                 "duration) to [system.signal] and the receiver's to [system.receiver] "
                 "(simulation.System; CHANGELOG)"
             )
+        known = {f for f in cls.__dataclass_fields__} | {"height"}
+        unknown = [k for k in kw if k not in known]
+        if unknown:
+            raise ValueError(f"room: unknown field(s) {unknown}; allowed: {sorted(known)}")
+        if isinstance(kw.get("mounting"), list):
+            kw["mounting"] = tuple(kw["mounting"])
         if "corners" in kw or "height" in kw:
             if "corners" not in kw or "height" not in kw:
                 raise ValueError("room: a polygonal room needs both 'corners' and 'height'")

@@ -177,7 +177,7 @@ def pra_general_windows(
     import pyroomacoustics as pra
     import scipy.signal
 
-    chirp, rx = room.signal.chirp, room.signal.receiver
+    chirp, rx = Chirp(), Receiver()  # the paper's signal
     a = np.asarray(anchors, dtype=float)
     p = np.asarray(nodes, dtype=float)
     ratio = Fraction(rx.fs / fs_rir).limit_denominator(10000)
@@ -195,8 +195,9 @@ def pra_general_windows(
             proom = pra.Room(pra_walls(room), fs=int(round(fs_rir)), max_order=room.max_order,
                              air_absorption=False)  # fmt: skip
             proom.set_sound_speed(room.speed_of_sound)
-            if air_absorption and room.air_reference > 0:
-                proom.air_absorption = np.array([room.air_reference])
+            air = float(room.air_coefficient(chirp.centre))
+            if air_absorption and air > 0:
+                proom.air_absorption = np.array([air])
             proom.add_source(a[j].tolist())
             proom.add_microphone_array(p.T.copy())
             proom.compute_rir()

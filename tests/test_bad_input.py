@@ -15,7 +15,7 @@ import placement
 from analysis import figures
 from placement.cli import main
 from placement.pso import PSOOptions, pso
-from simulation import Chirp, Receiver, Room, Signal, evaluate_layout, locate, simulate_ranges
+from simulation import Chirp, Receiver, Room, System, evaluate_layout, locate, simulate_ranges
 from simulation.multipath import image_indices
 
 ROOM = Room.techtile()
@@ -547,20 +547,21 @@ def test_a_checkpoint_in_a_new_folder_is_written(tmp_path):
     [
         (lambda: Receiver(window=33), "window"),  # the default high-pass pads by 33
         (lambda: Receiver(window=120, highpass_order=40), "window"),
-        (lambda: Room(signal="r"), "signal"),
-        (lambda: Signal(Chirp(f0=1e6, f1=9e5)), "chirp"),
-        (lambda: Signal(receiver=Receiver(highpass_cutoff=1e-9)), "highpass_cutoff"),
-        (lambda: Signal(chirp="x"), "chirp"),
-        (lambda: Signal(receiver="x"), "receiver"),
+        (lambda: System(Chirp(f0=1e6, f1=9e5)), "chirp"),
+        (lambda: System(receiver=Receiver(highpass_cutoff=1e-9)), "highpass_cutoff"),
+        (lambda: System(chirp="x"), "chirp"),
+        (lambda: System(receiver="x"), "receiver"),
+        (lambda: System(positioning="x"), "positioning"),
     ],  # fmt: skip
 )
 def test_chirp_and_receiver_must_work_together(call, name):
     refused(name, call)
 
 
-def test_physical_noise_uses_the_rooms_signal():
-    room = Room(signal=Signal(Chirp(duration=0.05), Receiver(t_wake=0.049)))
-    assert analysis.PhysicalRangeNoise(room).signal == room.signal
+def test_physical_noise_uses_the_systems_signal():
+    system = System(Chirp(duration=0.05), Receiver(t_wake=0.049))
+    noise = analysis.PhysicalRangeNoise(Room(), system=system)
+    assert noise.chirp == system.chirp and noise.receiver == system.receiver
 
 
 @pytest.mark.parametrize("items", [5, True, 2.5])

@@ -57,9 +57,9 @@ def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
 
     room = Room.techtile()
     ok = build_parser().parse_args(["plan", *argv, "--finalists", str(particles)])
-    _check_args(ok, room)
+    _check_args(ok, room, None)
     bad = build_parser().parse_args(["plan", *argv, "--finalists", str(particles + 1)])
     with pytest.raises(
         ValueError, match=f"--finalists: must be an integer in \\[1, {particles}\\]"
     ):
-        _check_args(bad, room)
+        _check_args(bad, room, None)

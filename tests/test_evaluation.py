@@ -189,7 +189,7 @@ def test_calibrated_sigma_from_simulation_is_centimetres():
 
 
 def test_other_room_chirp_receiver_and_snr():
-    from simulation import Chirp, Receiver, Signal
+    from simulation import Chirp, Receiver, System
 
     chirp = Chirp(f0=20e3, f1=40e3, duration=20e-3)
     rx = Receiver(t_wake=19e-3, window=256)
@@ -197,22 +197,23 @@ def test_other_room_chirp_receiver_and_snr():
         size=(6.0, 5.0, 3.0),
         absorption={"west": 0.3, "east": 0.3},
         max_order=2,
-        signal=Signal(chirp, rx),
     )
+    system = System(chirp, rx)
     a = room.corners_layout()
     nodes = room.grid((4, 3, 3))
-    ev = evaluate_layout(room, a, realizations=2, rng=0, nodes=nodes, snr_db=20.0)
+    ev = evaluate_layout(room, a, realizations=2, rng=0, nodes=nodes, snr_db=20.0, system=system)
     d = np.linalg.norm(nodes[:, None] - a[None], axis=-1)
     # the 1.33 ms window opens at 19 ms, 0.33 ms before the 20 ms chirp would leave it:
     # it holds 1 ms of a path's chirp from ranges 0 to c·(19 + 1.33 − 1) ms = 6.6 m (the
     # room's diagonal is 8.4 m); a node fixes when 4 anchors are within them
-    in_reach = (d >= room.near_limit) & (d <= room.reach)
-    assert room.reach == pytest.approx(room.speed_of_sound * (19e-3 + 255 / 192e3 - 1e-3))
-    assert room.near_limit == 0.0
+    c = room.speed_of_sound
+    in_reach = (d >= system.near_limit(c)) & (d <= system.reach(c))
+    assert system.reach(c) == pytest.approx(c * (19e-3 + 255 / 192e3 - 1e-3))
+    assert system.near_limit(c) == 0.0
     assert 0 < in_reach.mean() < 1
     assert ev.errors.shape == (2, 36) and ev.range_errors.shape == (2, 36, 4)
     np.testing.assert_array_equal(np.isfinite(ev.ranges), np.broadcast_to(in_reach, (2, 36, 4)))
     np.testing.assert_array_equal(np.isfinite(ev.errors[0]), in_reach.all(axis=1))
-    clean = simulate_ranges(room, a, nodes, noise=False)
+    clean = simulate_ranges(room, a, nodes, noise=False, system=system)
     assert np.all(np.isnan(clean[~in_reach]))
     assert np.median(np.abs(clean - d)[in_reach]) < 0.1

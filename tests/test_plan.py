@@ -207,27 +207,27 @@ def test_progress_bars_can_be_switched_off(capsys):
         assert phase in err
 
 
-def test_the_grid_check_keeps_positions_in_the_room_and_states_the_unbounded_fixes():
-    """The grid check solves its ranges kept inside the room; ``unbounded`` summarizes the
-    same realizations (the same noise streams) solved with unbounded iterates."""
-    from placement.validation import summary
-    from simulation import evaluate_layout
+def test_the_grid_check_solves_with_the_systems_positioning():
+    """The grid check simulates the system it is given: its errors are those of
+    ``evaluate_layout`` with that system on the same noise streams; the paper's system
+    (not kept in the room) and one that keeps positions in the room differ."""
+    from simulation import Positioning, System, evaluate_layout
 
     a = ROOM.corners_layout()
     opt = ValidationOptions(realizations=2, held_out_realizations=0, mount_draws=0,
                             field_draws=0)  # fmt: skip
-    v = validate_layout(ROOM, a, rng=4, options=opt, nodes=NODES)
     child = int(np.random.SeedSequence(4).spawn(5)[0].generate_state(1)[0])
     halves = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(child).spawn(2)]
-
-    def grid(bounded):
-        runs = [evaluate_layout(ROOM, a, 1, rng=s, nodes=NODES, bounded=bounded) for s in halves]
-        return np.concatenate([ev.errors for ev in runs])
-
-    np.testing.assert_allclose(v.errors, grid(True), rtol=0, atol=1e-12)
-    assert v.unbounded.summary_dict() == summary(grid(False))
-    assert v.unbounded.std != v.std  # the corners layout: some fixes leave the room
-    assert Validation.from_dict(v.to_dict()).unbounded == v.unbounded
+    kept = System(positioning=Positioning(keep_in_room=True))
+    out = {}
+    for system in (System(), kept):
+        v = validate_layout(ROOM, a, rng=4, options=opt, nodes=NODES, system=system)
+        runs = [evaluate_layout(ROOM, a, 1, rng=s, nodes=NODES, system=system) for s in halves]
+        np.testing.assert_allclose(v.errors, np.concatenate([ev.errors for ev in runs]),
+                                   rtol=0, atol=1e-12)  # fmt: skip
+        assert Validation.from_dict(v.to_dict()).to_dict() == v.to_dict()
+        out[system.positioning.keep_in_room] = v.std
+    assert out[True] != out[False]  # the corners layout: some fixes leave the room
 
 
 def test_the_field_check_draws_random_tags_and_mounting_error_together():
@@ -243,10 +243,9 @@ def test_the_field_check_draws_random_tags_and_mounting_error_together():
     errors = np.concatenate([field_errors(ROOM, a, 15, 0.03, d, int(child)) for d in range(3)],
                             axis=1)  # fmt: skip
     assert v.field.to_dict() == {"draws": 3, "tags_per_draw": 15, "tolerance_m": 0.03,
-                                 **summary(errors[0]), "unbounded": summary(errors[1])}  # fmt: skip
-    # every check keeps the positions in the room; the other convention, stated beside,
-    # solves the same ranges with unbounded iterates
-    assert errors.shape == (2, 45) and (errors[0] <= np.hypot(8, np.hypot(4, 2.4))).all()
+                                 **summary(errors[0], errors[1] > 0)}  # fmt: skip
+    # row 0 the errors, row 1 whether each fix is verified (least squares verifies none)
+    assert errors.shape == (2, 45) and not errors[1].any() and v.field.verified == 0
     assert v.field.n == 45 and v.mounting is None
     assert validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES).field == v.field
     # the tags of a draw are random points of the node region, a new set per draw

@@ -252,8 +252,8 @@ def test_the_peer_gives_the_same_ranges_and_line_of_sight(room):
         nodes[:3] = [[1.0, 5.5, 1.5], [2.0, 5.0, 1.0], [0.5, 4.0, 2.0]]
     wp, los_peer = pra_general_windows(room, a, nodes)
     paths = compute_paths(room, a, nodes, directivity="omni")
-    w = received_windows(paths, room.speed_of_sound, room.signal.chirp, room.signal.receiver)
-    dsp = dsp_for(room.signal.chirp, room.signal.receiver, "float64")
+    w = received_windows(paths, room.speed_of_sound)
+    dsp = dsp_for(precision="float64")
     r_ours = dsp.ranges(w, room.speed_of_sound)
     r_peer = dsp.ranges(wp, room.speed_of_sound)
     assert np.mean(np.abs(r_ours - r_peer) <= 0.01) >= 0.9

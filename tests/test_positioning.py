@@ -177,7 +177,7 @@ def test_one_compiled_loop_for_every_caller():
     ranges = _ranges(a, ROOM.grid()[:7])
     free = locate(a, ranges)
     boxed = locate(a, ranges, region=REGION, bounded=True)
-    assert len(positioning._lm_rows.signatures) == 1
+    assert len(positioning.lm_rows.signatures) == 1
     assert np.all(np.isfinite(free)) and np.all(np.isfinite(boxed))
 
 

@@ -12,7 +12,7 @@ from scipy.special import ndtr
 
 import analysis
 from placement.plan import LOCAL_SWARM
-from simulation import Chirp, Receiver, Room, Signal, evaluate_layout, simulate_ranges
+from simulation import Chirp, Receiver, Room, System, evaluate_layout, simulate_ranges
 from simulation import air as air_model
 from simulation.evaluation import RangingScene
 from simulation.multipath import compute_paths
@@ -22,10 +22,11 @@ from simulation.synthesis import synthesize, synthesize_direct
 
 TECHTILE = Room.techtile()
 #: a long chirp whose 1 ms window opens at its last millisecond: reach c·89 ms
-LONG = Signal(Chirp(duration=0.09), Receiver(t_wake=0.089))
+LONG = System(Chirp(duration=0.09), Receiver(t_wake=0.089))
+PAPER = System()
 
 
-def _overlap(signal: Signal, tau: np.ndarray) -> np.ndarray:
+def _overlap(signal: System, tau: np.ndarray) -> np.ndarray:
     """Seconds of a path's chirp the window holds, counted on the window's samples: the
     samples where the chirp of delay τ is on, over fs."""
     rx, ch = signal.receiver, signal.chirp
@@ -34,15 +35,15 @@ def _overlap(signal: Signal, tau: np.ndarray) -> np.ndarray:
     return np.sum((u >= 0) & (u <= ch.duration), axis=1) / rx.fs
 
 
-WIDE = Signal(receiver=Receiver(t_wake=0.01, window=3840))  # 20 ms of a 30 ms chirp
-WHOLE = Signal(receiver=Receiver(t_wake=0.002, window=7680))  # 40 ms: holds whole chirps
+WIDE = System(receiver=Receiver(t_wake=0.01, window=3840))  # 20 ms of a 30 ms chirp
+WHOLE = System(receiver=Receiver(t_wake=0.002, window=7680))  # 40 ms: holds whole chirps
 
 
 @pytest.mark.parametrize(
-    "signal", [Signal(), LONG, Signal(receiver=Receiver(t_wake=0.02)), WIDE, WHOLE]
+    "signal", [System(), LONG, System(receiver=Receiver(t_wake=0.02)), WIDE, WHOLE]
 )
 def test_the_reach_is_where_the_window_stops_holding_enough_chirp(signal):
-    """Derivation (simulation.signal): an overlap of at least D = min(W, T, 1 ms) for τ in
+    """Derivation (simulation.system): an overlap of at least D = min(W, T, 1 ms) for τ in
     [τ_min, τ_max] and less just outside; the synthesized window of one path carries
     energy in proportion."""
     lo, hi = signal.delays
@@ -67,15 +68,16 @@ def test_the_reach_is_where_the_window_stops_holding_enough_chirp(signal):
 def test_the_papers_design_keeps_its_reach_exactly():
     """D = W for the paper's 1 ms window: τ_max = t_wake and τ_min = 0 exactly, as
     before the overlap rule."""
-    assert Signal().delays == (0.0, Receiver().t_wake)
+    assert System().delays == (0.0, Receiver().t_wake)
     assert WIDE.reach(343.0) == pytest.approx(343.0 * (0.01 + WIDE.window_span - 1e-3))
 
 
 def test_the_papers_design_reaches_ten_metres():
     """c·29 ms at 20 °C: the 10.30 m constant of the issue was an empty window."""
-    assert TECHTILE.reach == pytest.approx(TECHTILE.speed_of_sound * 0.029)
-    assert 9.9 < TECHTILE.reach < 10.0 and TECHTILE.near_limit == 0.0
-    assert TECHTILE.diagonal < TECHTILE.reach  # the paper's room fits
+    c = TECHTILE.speed_of_sound
+    assert PAPER.reach(c) == pytest.approx(c * 0.029)
+    assert 9.9 < PAPER.reach(c) < 10.0 and PAPER.near_limit(c) == 0.0
+    assert TECHTILE.diagonal < PAPER.reach(c)  # the paper's room fits
 
 
 def test_noise_free_ranges_beyond_the_reach_are_no_range_and_within_it_as_before():
@@ -86,7 +88,7 @@ def test_noise_free_ranges_beyond_the_reach_are_no_range_and_within_it_as_before
     d = np.array([1.0, 4.0, 7.5, 9.5, 10.5, 12.0, 15.0, 19.0])
     nodes = np.stack([0.03 + d, np.full_like(d, 6.0), np.full_like(d, 2.0)], axis=1)
     r = simulate_ranges(hall, anchor, nodes, noise=False)[:, 0]
-    within = d <= hall.reach
+    within = d <= PAPER.reach(hall.speed_of_sound)
     assert within.sum() == 4
     np.testing.assert_allclose(r[within], d[within], atol=0.09)  # the receiver's own error
     assert np.all(np.isnan(r[~within]))
@@ -94,8 +96,7 @@ def test_noise_free_ranges_beyond_the_reach_are_no_range_and_within_it_as_before
     _, status = scene.detect(scene.windows)
     assert np.all(status[within, 0] == HEARD) and np.all(status[~within, 0] == OUT_OF_REACH)
     # the longer chirp reaches them all
-    long = dataclasses.replace(hall, signal=LONG)
-    r = simulate_ranges(long, anchor, nodes, noise=False)[:, 0]
+    r = simulate_ranges(hall, anchor, nodes, noise=False, system=LONG)[:, 0]
     np.testing.assert_allclose(r, d, atol=0.15)
 
 
@@ -126,7 +127,7 @@ def test_detection_false_alarm_rate_stays_below_its_bound():
     n = 4000
     sigma = 1.0
     windows = sigma * rng.standard_normal((n, rx.window))
-    _, status = dsp.detect(windows, 343.0, sigma, Signal(receiver=rx).delays, 0.01)
+    _, status = dsp.detect(windows, 343.0, sigma, System(receiver=rx).delays, 0.01)
     rate = np.mean(status == HEARD)
     assert rate <= 0.05 + 3 * math.sqrt(0.05 * 0.95 / n)
     assert rate > 0  # the threshold is not infinitely high
@@ -139,7 +140,7 @@ def test_detection_miss_rate_follows_the_correlation_snr(margin):
     "Detection"): Φ(η − d) if the pick sat on the true lag; the pick is the highest of the
     neighbouring carrier peaks, which the noise lifts by a fraction of a σ."""
     rx = Receiver(false_alarm=1e-3)
-    sig = Signal(receiver=rx)
+    sig = System(receiver=rx)
     dsp = dsp_for(sig.chirp, rx)
     tau = 0.010
     clean = synthesize(np.array([[tau]]), np.ones((1, 1)), sig.chirp, rx)[0]
@@ -162,21 +163,16 @@ def test_detection_miss_rate_follows_the_correlation_snr(margin):
 def test_a_room_with_a_threshold_hears_fewer_anchors_far_away():
     """ISO air and a detection threshold in a long hall: the far anchor fades out; the
     simulated status and the bound's coverage agree on which nodes hear it."""
-    hall = Room(
-        size=(30.0, 6.0, 4.0),
-        max_order=0,
-        air_absorption="iso9613",
-        signal=dataclasses.replace(LONG, receiver=dataclasses.replace(LONG.receiver,
-                                                                      false_alarm=1e-3)),
-    )  # fmt: skip
+    hall = Room(size=(30.0, 6.0, 4.0), max_order=0, air_absorption="iso9613")
+    system = LONG.with_signal(false_alarm=1e-3)
     anchor = np.array([[0.03, 3.0, 2.0]])
     d = np.array([2.0, 5.0, 10.0, 20.0, 29.0])
     nodes = np.stack([0.03 + d, np.full_like(d, 3.0), np.full_like(d, 2.0)], axis=1)
-    scene = RangingScene(hall, anchor, nodes)
+    scene = RangingScene(hall, anchor, nodes, system=system)
     _, status = scene.detect(scene.windows)
     heard = status[:, 0] == HEARD
     assert heard[0] and not heard[-1]  # near: heard; 29 m: faded below the threshold
-    np.testing.assert_array_equal(analysis.heard(hall, anchor, nodes)[:, 0], heard)
+    np.testing.assert_array_equal(analysis.heard(hall, anchor, nodes, system=system)[:, 0], heard)
 
 
 def test_locate_from_the_heard_anchors_in_an_evaluation():
@@ -188,7 +184,7 @@ def test_locate_from_the_heard_anchors_in_an_evaluation():
     nodes = hall.grid((10, 3, 2))
     ev = evaluate_layout(hall, a, realizations=2, rng=0, nodes=nodes)
     d = np.linalg.norm(nodes[:, None] - a[None], axis=-1)
-    enough = np.sum(d <= hall.reach, axis=1) >= 4
+    enough = np.sum(d <= PAPER.reach(hall.speed_of_sound), axis=1) >= 4
     assert 0 < enough.mean() < 1
     np.testing.assert_array_equal(np.isfinite(ev.errors), np.broadcast_to(enough, (2, 60)))
     assert ev.availability == pytest.approx(enough.mean())
@@ -240,16 +236,16 @@ def test_iso9613_in_the_chirps_band_is_about_three_times_the_papers_coefficient(
 def test_iso_air_applies_across_the_band_as_the_exact_envelope():
     """The fast synthesizer's linearized air envelope against the sample-by-sample one, on
     paths over the whole band (a 20 m path, windows at the chirp's start and end)."""
-    room = Room(size=(25.0, 5.0, 3.0), air_absorption="iso9613", max_order=1,
-                signal=LONG)  # fmt: skip
+    room = Room(size=(25.0, 5.0, 3.0), air_absorption="iso9613", max_order=1)
     a = np.array([[0.03, 2.5, 1.5]])
     nodes = np.array([[20.0, 2.5, 1.5], [3.0, 1.0, 1.0], [12.0, 4.0, 2.0]])
-    paths = compute_paths(room, a, nodes)
+    sig = LONG
+    paths = compute_paths(room, a, nodes, frequency=sig.chirp.centre)
     c = room.speed_of_sound
-    sig = room.signal
-    fast = received_windows(paths, c, sig.chirp, sig.receiver, room.air_excess())
+    air = room.air_excess(sig.chirp.centre)
+    fast = received_windows(paths, c, sig.chirp, sig.receiver, air)
     exact = synthesize_direct(paths.delays(c), paths.amplitude, sig.chirp, sig.receiver,
-                              lengths=paths.length, air=room.air_excess())  # fmt: skip
+                              lengths=paths.length, air=air)  # fmt: skip
     np.testing.assert_allclose(fast, exact, atol=1e-6 * np.abs(exact).max())
     # about 0.6 dB/m more absorbing than the paper's coefficient in the band the far
     # node's window holds (about 32 kHz): 20 m weaken it by some 12 dB in energy
@@ -260,23 +256,25 @@ def test_iso_air_applies_across_the_band_as_the_exact_envelope():
 
 
 # -- settings ------------------------------------------------------------------------------
-def test_signal_and_air_settings_round_trip_through_toml(tmp_path):
-    room = Room(
-        size=(24.0, 16.0, 6.0),
-        air_absorption="iso9613",
-        humidity=35.0,
-        pressure=98.0,
-        signal=Signal(Chirp(f0=30e3, f1=50e3, duration=0.06),
-                      Receiver(t_wake=0.058, window=256, false_alarm=1e-4)),
-    )  # fmt: skip
+def test_air_settings_round_trip_through_toml_and_the_system_beside_them(tmp_path):
+    room = Room(size=(24.0, 16.0, 6.0), air_absorption="iso9613", humidity=35.0, pressure=98.0)
+    system = System(Chirp(f0=30e3, f1=50e3, duration=0.06),
+                    Receiver(t_wake=0.058, window=256, false_alarm=1e-4), name="long")  # fmt: skip
     path = tmp_path / "hall.toml"
     room.to_toml(path)
     text = path.read_text()
-    assert "[signal]" in text and 'air_absorption = "iso9613"' in text
+    assert 'air_absorption = "iso9613"' in text and "signal" not in text
+    table = system.to_dict()
+    text += '\n[system]\nname = "long"\n'
+    for part in ("signal", "receiver"):
+        text += f"\n[system.{part}]\n" + "".join(
+            f"{k} = {v!r}\n" for k, v in table[part].items() if v is not None
+        )
+    path.write_text(text.replace("'", '"'))
     back = Room.from_toml(path)
-    assert back.signal == room.signal and back.to_dict() == room.to_dict()
-    assert back.reach == pytest.approx(room.reach)
-    # the paper's room writes no [signal] table: its file and dictionary are unchanged
+    assert back.to_dict() == room.to_dict()
+    assert System.from_toml(path) == system
+    # the paper's room writes no signal: its dictionary is unchanged
     assert "signal" not in Room.techtile().to_dict()
     assert "humidity" not in Room.techtile().to_dict()
 
@@ -288,9 +286,9 @@ def test_signal_and_air_settings_round_trip_through_toml(tmp_path):
         (lambda: Room(humidity=-1.0), "humidity"),
         (lambda: Room(pressure=0.0), "pressure"),
         (lambda: Room(air_absorption="iso"), "air_absorption"),
-        (lambda: Signal(Chirp(f0=45e3, f1=25e3)), "chirp"),  # inverted band
-        (lambda: Signal(Chirp(f0=25e3, f1=120e3)), "chirp"),  # above fs/2
-        (lambda: Room(signal=Signal(receiver=Receiver(t_wake=0.0, window=20000))), "window"),
+        (lambda: System(Chirp(f0=45e3, f1=25e3)), "chirp"),  # inverted band
+        (lambda: System(Chirp(f0=25e3, f1=120e3)), "chirp"),  # above fs/2
+        (lambda: System(receiver=Receiver(t_wake=0.0, window=20000)).check_room(Room()), "window"),
         (lambda: Receiver(pick="last"), "pick"),
         (lambda: Receiver(first_path_ratio=0.0), "first_path_ratio"),
         (lambda: Receiver(first_path_noise=-1.0), "first_path_noise"),
@@ -298,12 +296,16 @@ def test_signal_and_air_settings_round_trip_through_toml(tmp_path):
         (lambda: Chirp(duration=-0.03), "duration"),
         (lambda: Chirp(duration=5.0), "duration"),  # seconds of chirp
         (
-            lambda: Signal(Chirp(duration=1.0, f1=450e3), Receiver(fs=10e6)),
+            lambda: System(Chirp(duration=1.0, f1=450e3), Receiver(fs=10e6)),
             "chirp duration x fs x window",
         ),  # a DSP of tens of GB: refused before any work
         (lambda: Receiver(false_alarm=0.0), "false_alarm"),
         (lambda: Receiver(false_alarm=0.7), "false_alarm"),
-        (lambda: Room(signal={"duration": 0.05, "bogus": 1}), "signal"),
+        (lambda: System.from_dict({"signal": {"duration": 0.05, "bogus": 1}}), "system.signal"),
+        (
+            lambda: Room.from_dict({"size": [8, 4, 2.4], "signal": {"duration": 0.05}}),
+            "system.signal",
+        ),
     ],  # fmt: skip
 )
 def test_bad_signal_and_air_settings_are_refused(make, name):
@@ -312,10 +314,10 @@ def test_bad_signal_and_air_settings_are_refused(make, name):
 
 
 # -- planning for availability -------------------------------------------------------------
-def _long_room(signal: Signal | None = None) -> Room:
+def _long_room() -> Room:
     """A 22 × 4 × 3 m corridor: the paper's design (reach 9.95 m) leaves its ends without
     4 anchors unless they are spread along it."""
-    return Room(size=(22.0, 4.0, 3.0), max_order=1, signal=signal or Signal(),
+    return Room(size=(22.0, 4.0, 3.0), max_order=1,
                 zones=[{"min": [0.5, 1.0, 1.0], "max": [21.5, 3.0, 1.0]}],
                 zone_spacing=3.5)  # fmt: skip
 
@@ -336,7 +338,7 @@ def test_the_plan_scores_availability_first_and_says_so(caplog):
                                       progress=False)  # fmt: skip
     assert "larger than the signal's reach" in caplog.text
     reach = res.settings.reach
-    assert reach["exceeded"] and reach["reach_m"] == pytest.approx(room.reach)
+    assert reach["exceeded"] and reach["reach_m"] == pytest.approx(PAPER.reach(room.speed_of_sound))
     v = res.validation
     for block in (v, v.held_out.grid, v.held_out.random, v.mounting):
         assert 0 <= block.availability <= 1
@@ -350,7 +352,7 @@ def test_the_plan_scores_availability_first_and_says_so(caplog):
     # the paper's room fits its signal: no warning, nothing exceeded
     from placement.plan import reach_check
 
-    assert not reach_check(TECHTILE)["exceeded"]
+    assert not reach_check(TECHTILE, PAPER)["exceeded"]
 
 
 def test_the_sweep_recommends_the_smallest_m_with_the_availability():
@@ -394,9 +396,10 @@ def test_coverage_counts_the_anchors_heard_and_the_bound_ignores_the_rest():
                   [21.97, 2.0, 2.0]])  # fmt: skip
     nodes = np.array([[2.0, 2.0, 1.0], [15.0, 2.0, 1.0]])
     d = np.linalg.norm(nodes[:, None] - a[None], axis=-1)
-    np.testing.assert_array_equal(analysis.coverage(room, a, nodes), np.sum(d <= room.reach, 1))
+    reach = PAPER.reach(room.speed_of_sound)
+    np.testing.assert_array_equal(analysis.coverage(room, a, nodes), np.sum(d <= reach, 1))
     s = analysis.heard_sigma(room, a, nodes, 0.04)
-    assert np.all(np.isinf(s[d > room.reach])) and np.all(s[d <= room.reach] == 0.04)
+    assert np.all(np.isinf(s[d > reach])) and np.all(s[d <= reach] == 0.04)
     pebs = analysis.peb(a, nodes, sigma=s)
     assert np.isfinite(pebs[0]) and np.isinf(pebs[1])  # one anchor heard at 15 m: no bound
     # in the paper's room every anchor is heard everywhere: the PEB is the constant-σ one

@@ -6,7 +6,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simulation import Chirp, Receiver, Room, Signal
+from simulation import Chirp, Receiver, Room, System
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.multipath import compute_paths
 from simulation.received import received_windows
@@ -26,8 +26,9 @@ EIGHT = np.array(
 )  # fmt: skip
 
 
-def _with(room: Room, **rx) -> Room:
-    return dataclasses.replace(room, signal=Signal(receiver=Receiver(**rx)))
+def _with(**rx) -> System:
+    """The paper's system with the receiver's fields ``rx`` changed."""
+    return System(receiver=Receiver(**rx))
 
 
 def _random_windows(rx: Receiver, rng, n=24):
@@ -63,13 +64,13 @@ def test_the_papers_receiver_keeps_its_chain():
     """The default receiver runs the one-matrix DSP and the short-window synthesis: the
     paper's results do not move."""
     assert dsp_for().form == "matrix"
-    assert Signal().delays == (0.0, Receiver().t_wake)
+    assert System().delays == (0.0, Receiver().t_wake)
     assert Receiver().pick == "paper"
 
 
 @pytest.mark.parametrize("rx", [W20, Receiver(window=7680, t_wake=0.002)])
 def test_long_window_synthesis_equals_direct_evaluation(rx):
-    room = _with(ORDINARY, window=rx.window, t_wake=rx.t_wake)
+    room = ORDINARY
     paths = compute_paths(room, EIGHT[:4], room.grid()[::9])
     tau = paths.delays(room.speed_of_sound)
     fast = synthesize(tau, paths.amplitude, CH, rx)
@@ -78,7 +79,7 @@ def test_long_window_synthesis_equals_direct_evaluation(rx):
     assert np.all(np.abs(fast - slow) <= 1e-10 * scale)
     # frequency-dependent air: the envelope linearized over each path's part of the chirp
     room = dataclasses.replace(room, air_absorption="iso9613")
-    air = room.air_excess()
+    air = room.air_excess(CH.centre)
     fast = synthesize(tau, paths.amplitude, CH, rx, lengths=paths.length, air=air)
     slow = synthesize_direct(tau, paths.amplitude, CH, rx, lengths=paths.length, air=air)
     assert np.all(np.abs(fast - slow) <= 0.01 * scale)
@@ -89,10 +90,10 @@ def test_first_path_equals_the_papers_pick_without_echoes(window, t_wake):
     """Anechoic room: one arrival per window, so the earliest that stands out is the
     strongest: the same pick on every noise-free window. With noise, a sidelobe of a far
     (faint) anchor can rise above the first-path floor: still the same pick on 99.5 %."""
-    room = _with(ANECHOIC, window=window, t_wake=t_wake)
-    scene = RangingScene(room, EIGHT, room.grid()[::3])
-    first = dataclasses.replace(room.signal.receiver, pick="first-path")
-    paper, fp = dsp_for(CH, room.signal.receiver), dsp_for(CH, first)
+    room, system = ANECHOIC, _with(window=window, t_wake=t_wake)
+    scene = RangingScene(room, EIGHT, room.grid()[::3], system=system)
+    first = dataclasses.replace(system.receiver, pick="first-path")
+    paper, fp = dsp_for(CH, system.receiver), dsp_for(CH, first)
     for w, share in ((scene.windows, 1.0), (scene.noisy_windows(np.random.default_rng(1)), 0.995)):
         sigma = np.broadcast_to(scene.noise_sigma, w.shape[:-1])
         assert np.mean(paper.indices(w) == fp.picks(w, sigma=sigma)[0]) >= share
@@ -132,9 +133,9 @@ def test_no_valid_setting_raises_and_ranges_are_sensible(window, t_wake, pick):
     """The hard-walled room with the window opening with the chirp (the −2.69 m ranges
     that made ``locate`` raise) and other corners of the settings: every pair gets a
     range or "no range", never a negative one, and every node is located or not."""
-    room = _with(ORDINARY, window=window, t_wake=t_wake, pick=pick)
+    room, system = ORDINARY, _with(window=window, t_wake=t_wake, pick=pick)
     nodes = room.grid()[::9]
-    ev = evaluate_layout(room, EIGHT, realizations=1, rng=0, nodes=nodes)
+    ev = evaluate_layout(room, EIGHT, realizations=1, rng=0, nodes=nodes, system=system)
     r = np.asarray(ev.ranges)
     assert np.all(np.isnan(r) | (r >= 0))
     status = np.asarray(ev.range_status)
@@ -146,27 +147,27 @@ def test_no_valid_setting_raises_and_ranges_are_sensible(window, t_wake, pick):
 
 def test_a_long_window_sees_ranges_the_papers_cannot():
     """Noise-free, anechoic, a 20 ms window: ranges to the reach (9.95 m) are the distance."""
-    hall = _with(Room(size=[12.0, 3.0, 3.0], absorption={k: 1.0 for k in ALL}),
-                 window=3840, t_wake=0.01)  # fmt: skip
+    hall = Room(size=[12.0, 3.0, 3.0], absorption={k: 1.0 for k in ALL})
+    system = _with(window=3840, t_wake=0.01)
     a = np.array([[0.03, 1.5, 1.5]])
     nodes = np.stack([np.linspace(1.0, 9.5, 9), np.full(9, 1.5), np.full(9, 1.5)], axis=1)
     paths = compute_paths(hall, a, nodes)
-    w = received_windows(paths, hall.speed_of_sound, hall.signal.chirp, hall.signal.receiver)
-    r = dsp_for(CH, hall.signal.receiver).ranges(w, hall.speed_of_sound)[:, 0]
+    w = received_windows(paths, hall.speed_of_sound, system.chirp, system.receiver)
+    r = dsp_for(CH, system.receiver).ranges(w, hall.speed_of_sound)[:, 0]
     np.testing.assert_allclose(r, nodes[:, 0] - 0.03, atol=0.01)
 
 
 def test_closing_windows_are_the_studys_designs():
     """A window of W closing with the chirp: 1 ms is the paper's receiver exactly, the
     whole chirp opens with it."""
-    from simulation.signal import closing_window
+    from simulation.system import closing_window
 
-    assert closing_window(Signal(), 1e-3) == Signal()
-    s = closing_window(Signal(), 20e-3, "first-path")
+    assert closing_window(System(), 1e-3).receiver == System().receiver
+    s = closing_window(System(), 20e-3, "first-path")
     assert (s.receiver.window, s.receiver.t_wake, s.receiver.pick) == (3840, 0.01, "first-path")
-    assert closing_window(Signal(), 30e-3).receiver.t_wake == 0.0
+    assert closing_window(System(), 30e-3).receiver.t_wake == 0.0
     with pytest.raises(ValueError, match="window"):
-        closing_window(Signal(), 0.05)
+        closing_window(System(), 0.05)
 
 
 def test_the_sweep_command_takes_receiver_designs(capsys):
@@ -177,11 +178,11 @@ def test_the_sweep_command_takes_receiver_designs(capsys):
     from placement.cli.sweep import designs
 
     args = argparse.Namespace(windows=[1.0, 20.0], picks=["paper", "first-path"])
-    rooms = designs(args, TECHTILE)
-    assert list(rooms) == ["1ms-paper", "1ms-first-path", "20ms-paper", "20ms-first-path"]
-    assert rooms["1ms-paper"].signal == Signal()
-    assert rooms["20ms-first-path"].signal.receiver.window == 3840
+    systems = designs(args, TECHTILE, System())
+    assert list(systems) == ["1ms-paper", "1ms-first-path", "20ms-paper", "20ms-first-path"]
+    assert systems["1ms-paper"].receiver == System().receiver
+    assert systems["20ms-first-path"].receiver.window == 3840
     with pytest.raises(ValueError, match="--windows"):
-        designs(argparse.Namespace(windows=[40.0], picks=None), TECHTILE)
+        designs(argparse.Namespace(windows=[40.0], picks=None), TECHTILE, System())
     with pytest.raises(ValueError, match="--picks"):
-        designs(argparse.Namespace(windows=None, picks=["paper"]), TECHTILE)
+        designs(argparse.Namespace(windows=None, picks=["paper"]), TECHTILE, System())

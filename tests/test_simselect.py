@@ -83,11 +83,19 @@ def test_draws_move_nodes_within_their_cells_and_anchors_within_the_tolerance():
 
 
 def test_table_errors_are_the_located_nodes_of_every_draw():
-    """The table's errors are the planner's fixes: started in the room, kept inside it."""
-    t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, rng=1)
+    """The table's errors are the planner's fixes, solved by the system's positioning: the
+    paper's started in the room, unbounded; a system that keeps them in the room."""
     S = np.array([0, 6, 12, 19])
+    kept = simulation.System(positioning=simulation.Positioning(keep_in_room=True))
+    t = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, rng=1,
+                    system=kept)  # fmt: skip
     x = simulation.locate(CAND[S], t.ranges[:, :, S], region=REGION, bounded=True)
     assert np.all((x >= REGION[0]) & (x <= REGION[1]))
+    paper = range_table(ROOM, CAND, NODES, draws=2, exact_draws=1, mount_tolerance=0.03, rng=1)
+    free = simulation.locate(CAND[S], paper.ranges[:, :, S], region=REGION)
+    np.testing.assert_allclose(
+        table_errors(paper, S[None])[0], np.linalg.norm(free - paper.nodes, axis=-1).ravel()
+    )
     e = np.linalg.norm(x - t.nodes, axis=-1).ravel()
     np.testing.assert_allclose(table_errors(t, S[None])[0], e)
     assert table_cost(t, S, "variance") == pytest.approx(np.var(e))

@@ -119,9 +119,11 @@ def test_the_sweep_table_prints_a_dash_for_a_check_that_did_not_run(capsys):
     from placement.cli.sweep import _print_table
 
     nan = float("nan")
-    row = SimpleNamespace(M=4, field_std=0.9, field_p95=2.9, std=0.8, mean=1.0, p95=2.6,
-                          availability=1.0, held_out_std=nan, mounting_std=0.85)  # fmt: skip
-    res = SimpleNamespace(rows=[row], target_availability=0.99, target_p95=None, recommended=4)
+    row = SimpleNamespace(M=4, field_std=0.9, field_p95=2.9, field_median=nan, field_mean=1.1,
+                          std=0.8, mean=1.0, p95=2.6, availability=1.0, held_out_std=nan,
+                          mounting_std=0.85, covered=1.0, coverage_k=4)  # fmt: skip
+    res = SimpleNamespace(rows=[row], target_availability=0.99, target_p95=None, recommended=4,
+                          target_coverage=0.95)  # fmt: skip
     _print_table(res, None)
     line = capsys.readouterr().out.splitlines()[1]
-    assert "nan" not in line and line.split()[-2:] == ["–", "0.850"]
+    assert "nan" not in line and line.split()[-1] == "–" and line.split()[1].startswith("–")
