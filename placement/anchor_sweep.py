@@ -182,7 +182,7 @@ def sweep(
     target_availability: float = 0.99,
     target_coverage: float = 0.95,
     on_row=None,
-    cost="variance",
+    cost="auto",
     initial="auto",
     search=None,
     swarm=None,

@@ -27,6 +27,23 @@ from simulation.system import System, as_system
 SIMULATED_STATISTICS = STATISTICS
 
 COST_NAMES = (*SIMULATED_STATISTICS, "peb")
+#: the planner's default cost: the paper's variance for the paper's experiment, the RMS
+#: elsewhere (:func:`default_cost`)
+AUTO = "auto"
+
+
+def default_cost(room, system) -> str:
+    """The cost the planner minimizes when given ``"auto"`` (docs/model.md, "Costs"): the
+    paper's variance for the paper's experiment (the paper's system in the paper's room,
+    what Table I reports), and the RMS of the error in any other room or with any other
+    system. The variance rewards a layout whose every fix is off by the same metres (an
+    echo that biases the ranges of a whole region); the RMS, √(mean² + σ²), does not
+    (BENCHMARKS.md, "The cost in a user's room")."""
+    from simulation.room import Room
+    from simulation.system import System
+
+    paper = system == System() and room == Room.techtile()
+    return "variance" if paper else "rms"
 
 
 @dataclass(frozen=True)
@@ -203,8 +220,9 @@ def make_cost(
 
 def is_simulated(cost) -> bool:
     """Whether ``cost`` is a simulated cost by name ("variance", "mean", "p95", "rms"):
-    the planner then searches a range table and scores the swarm on scene draws."""
-    return isinstance(cost, str) and cost in SIMULATED_STATISTICS
+    the planner then searches a range table and scores the swarm on scene draws ("auto"
+    stands for one of them)."""
+    return isinstance(cost, str) and (cost in SIMULATED_STATISTICS or cost == AUTO)
 
 
 def cost_name(cost) -> str:

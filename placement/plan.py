@@ -41,7 +41,7 @@ import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement import resume, ties
-from placement.costs import DrawsCost, cost_name, is_simulated, make_cost
+from placement.costs import AUTO, DrawsCost, cost_name, default_cost, is_simulated, make_cost
 from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
@@ -67,7 +67,7 @@ def seed_then_pso(
     M: int = 8,
     *,
     system=None,
-    cost="variance",
+    cost="auto",
     initial="auto",
     search: SearchOptions | None = None,
     swarm: PSOOptions | None = None,
@@ -90,7 +90,9 @@ def seed_then_pso(
         a preset's name or None: the paper's, :meth:`simulation.System.paper`): its chirp
         and receiver are simulated and its positioning solves every fix; recorded in the
         result.
-    cost : "variance" (the paper's), "mean", "p95" or "rms" of the simulated Euclidean
+    cost : "auto" (the default: "variance" for the paper's system in the paper's room,
+        "rms" otherwise, :func:`placement.costs.default_cost`), or "variance" (the
+        paper's), "mean", "p95" or "rms" of the simulated Euclidean
         error over the scene draws (:class:`placement.costs.DrawsCost`); "peb" (mean PEB at
         the default range σ, :data:`analysis.fim.DEFAULT_SIGMA`; a
         :class:`placement.costs.PEBCost` sets another); or a callable ``f(anchors)`` /
@@ -177,7 +179,7 @@ class Planner:
     ``validation_result`` (:meth:`validate`), and ``seconds`` and ``nfev`` per phase.
     """
 
-    def __init__(self, room, M, *, system=None, cost="variance", initial="auto", search=None,
+    def __init__(self, room, M, *, system=None, cost="auto", initial="auto", search=None,
                  swarm=None,
                  finalists=None, validation=None, effort="default", nodes=None, rng=0,
                  executor=None,
@@ -185,6 +187,8 @@ class Planner:
         self.room = room = room_or_default(room)
         self.system = as_system(system)
         self.system.check_room(room)
+        if isinstance(cost, str) and cost == AUTO:
+            cost = default_cost(room, self.system)
         self.M = checks.count("M", M, low=4, high=MAX_ANCHORS)
         self.cost, self.label, self.simulated = cost, cost_name(cost), is_simulated(cost)
         self.effort = preset = effort_options(effort)

@@ -1,4 +1,6 @@
-"""Windows synthesized from the analytic chirp for given path delays and amplitudes (paper §II).
+"""Windows synthesized from the analytic chirp for given path delays and amplitudes (paper
+§II); ``receiver`` arguments are :class:`simulation.receiver.Receiver` (its fs, t_wake and
+window).
 
 The node samples at fs for N samples from t_wake after the chirp starts. The noise-free
 window of anchor j at node p is the superposition of the delayed, scaled chirps of its
@@ -22,18 +24,13 @@ chirp's instantaneous bandwidth (docs/model.md, "Air absorption").
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numba
 import numpy as np
 
 from simulation.chirp import Chirp
 
-if TYPE_CHECKING:  # for the annotations only: the receiver builds on this module
-    from simulation.receiver import Receiver
 
-
-def active_paths(delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiver: Receiver):
+def active_paths(delays: np.ndarray, amplitude: np.ndarray, chirp: Chirp, receiver):
     """Boolean mask, shape of ``delays``: the path has A ≠ 0 and its chirp overlaps the window."""
     t0 = receiver.t_wake
     t1 = receiver.t_wake + (receiver.window - 1) / receiver.fs
@@ -44,7 +41,7 @@ def synthesize(
     delays: np.ndarray,
     amplitude: np.ndarray,
     chirp: Chirp,
-    receiver: Receiver,
+    receiver,
     *,
     lengths: np.ndarray | None = None,
     air=None,
@@ -113,7 +110,7 @@ GROUP = 2048
 LONG_WINDOW = 256
 
 
-def _long_windows(u0, amp, act, dist, air, chirp: Chirp, receiver: Receiver) -> np.ndarray:
+def _long_windows(u0, amp, act, dist, air, chirp: Chirp, receiver) -> np.ndarray:
     """(W, N) the sum of the active paths (``act`` (W, I)) of long windows, whose chirp
     may start and end inside the window: :func:`synthesize`'s fast form with each path
     restricted to the samples its chirp covers, n ∈ [a, b] with 0 ≤ u0 + n/fs ≤ T.
@@ -192,7 +189,7 @@ def _groups(counts: np.ndarray) -> list:
     return [order[i : i + GROUP] for i in range(0, len(order), GROUP)]
 
 
-def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver: Receiver) -> np.ndarray:
+def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver) -> np.ndarray:
     """(W, N) the sum of the whole-window paths (``whole`` (W, I)) of windows whose chirp
     times at sample 0 are ``u0`` (W, I) (:func:`synthesize`'s fast form)."""
     n_win, N, fs = len(u0), receiver.window, receiver.fs
@@ -229,7 +226,7 @@ def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver: Receiver) 
     return quad.real * z.imag + quad.imag * z.real
 
 
-def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Receiver, n_mid=None):
+def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver, n_mid=None):
     """ln of the air envelope exp(−½ d Δm(f)) linear in the sample n across the window:
     (value at n = 0, slope per sample), from Δm and its derivative at the frequency of
     sample ``n_mid`` (default the window's centre), for paths of lengths d whose chirp time
@@ -245,7 +242,7 @@ def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver: Re
 
 
 def _synthesize_direct_rows(
-    tau, amp, mask, chirp: Chirp, receiver: Receiver, dist=None, air=None
+    tau, amp, mask, chirp: Chirp, receiver, dist=None, air=None
 ) -> np.ndarray:
     """(W, N) Σ over masked paths of A·s(t_n − τ), evaluated sample by sample (with the
     air's envelope exp(−½ d Δm(f(u))) when ``air`` is given, ``dist`` the path lengths)."""
@@ -267,7 +264,7 @@ def synthesize_direct(
     delays: np.ndarray,
     amplitude: np.ndarray,
     chirp: Chirp,
-    receiver: Receiver,
+    receiver,
     *,
     lengths: np.ndarray | None = None,
     air=None,

@@ -20,7 +20,7 @@ from placement.cli.common import (
     number,
     output_dir,
 )
-from placement.costs import COST_NAMES
+from placement.costs import AUTO, COST_NAMES, default_cost
 from placement.workers import available_cores
 from simulation import checks
 from simulation.output import write_files
@@ -46,7 +46,13 @@ def register(sub) -> None:
     )
     p.add_argument("--anchors", "-M", type=int, default=8, help="number of anchors M (8)")
     add_room_argument(p)
-    p.add_argument("--cost", choices=COST_NAMES, default="variance", help="cost (variance)")
+    p.add_argument(
+        "--cost",
+        choices=(AUTO, *COST_NAMES),
+        default=AUTO,
+        help="what the plan makes small (auto: variance, the paper's, for the paper's system "
+        "in the paper's room; rms elsewhere)",
+    )
     add_effort_argument(p)
     p.add_argument("--particles", type=int, help="swarm size (library default)")
     p.add_argument("--iterations", type=int, help="swarm iterations (library default)")
@@ -244,6 +250,8 @@ def run(args) -> int:
     out = output_dir("--out", args.out)
     room = load_room(args.room, args)
     system = load_system(args, room)
+    if args.cost == AUTO:
+        args.cost = default_cost(room, system)
     opts = _check_args(args, room, system)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
