@@ -25,7 +25,7 @@ from _common import emit
 from scipy.special import ndtr
 
 import analysis
-from simulation import Chirp, Receiver, Room, Signal
+from simulation import Chirp, Receiver, Room, System
 from simulation.evaluation import RangingScene
 from simulation.receiver import HEARD, NOT_HEARD, dsp_for
 from simulation.synthesis import synthesize
@@ -37,7 +37,7 @@ def false_alarms(n: int, rng) -> list[dict]:
         rx = Receiver(false_alarm=fa)
         dsp = dsp_for(Chirp(), rx)
         windows = rng.standard_normal((n, rx.window))
-        _, status = dsp.detect(windows, 343.0, 1.0, Signal(receiver=rx).delays, 0.01)
+        _, status = dsp.detect(windows, 343.0, 1.0, System(receiver=rx).delays, 0.01)
         rate = float(np.mean(status == HEARD))
         out.append({"case": "noise only", "false_alarm_bound": fa, "eta": dsp.threshold,
                     "windows": n, "heard_share": rate, "within_bound": rate <= fa})  # fmt: skip
@@ -46,7 +46,7 @@ def false_alarms(n: int, rng) -> list[dict]:
 
 def misses(n: int, rng) -> list[dict]:
     rx = Receiver(false_alarm=1e-3)
-    sig = Signal(receiver=rx)
+    sig = System(receiver=rx)
     dsp = dsp_for(sig.chirp, rx)
     tau = 0.010
     clean = synthesize(np.array([[tau]]), np.ones((1, 1)), sig.chirp, rx)[0]
@@ -72,10 +72,11 @@ def hall_fade(realizations: int, rng) -> list[dict]:
     anchor = np.array([[0.03, 8.0, 5.0]])
     d = np.array([2.0, 5.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 24.0, 28.0])
     nodes = np.stack([0.03 + d, np.full_like(d, 8.0), np.full_like(d, 1.2)], axis=1)
-    scene = RangingScene(hall, anchor, nodes)
+    system = System.from_toml("examples/hall.toml")
+    scene = RangingScene(hall, anchor, nodes, system=system)
     windows = np.stack([scene.noisy_windows(rng) for _ in range(realizations)])
     _, status = scene.detect(windows)
-    bound = analysis.heard(hall, anchor, nodes)[:, 0]
+    bound = analysis.heard(hall, anchor, nodes, system=system)[:, 0]
     dist = np.linalg.norm(nodes - anchor, axis=1)
     return [
         {
@@ -84,7 +85,7 @@ def hall_fade(realizations: int, rng) -> list[dict]:
             "realizations": realizations,
             "heard_share": float(np.mean(status[:, i, 0] == HEARD)),
             "bound_says_heard": bool(bound[i]),
-            "reach_m": hall.reach,
+            "reach_m": system.reach(hall.speed_of_sound),
         }  # fmt: skip
         for i in range(len(d))
     ]

@@ -20,7 +20,7 @@ from _common import emit
 from bench_receiver import ROOMS, stats
 
 from simulation.evaluation import evaluate_layout
-from simulation.signal import Signal, closing_window
+from simulation.system import System, closing_window
 
 
 def main() -> None:
@@ -32,7 +32,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args()
     anchors = np.array(json.load(open(f"{args.layout}/layout.json"))["anchors"])
-    base = closing_window(Signal(), args.window_ms * 1e-3)
+    base = closing_window(System.paper(), args.window_ms * 1e-3)
     settings = [("paper", None, None)] + [
         ("first-path", r, k) for r in args.ratios for k in args.noise
     ]
@@ -41,8 +41,8 @@ def main() -> None:
             rx = dataclasses.replace(base.receiver, pick=pick)
             if ratio is not None:
                 rx = dataclasses.replace(rx, first_path_ratio=ratio, first_path_noise=kappa)
-            r = dataclasses.replace(room, signal=dataclasses.replace(base, receiver=rx))
-            ev = evaluate_layout(r, anchors, realizations=2, rng=args.seed)
+            system = dataclasses.replace(base, receiver=rx)
+            ev = evaluate_layout(room, anchors, realizations=2, rng=args.seed, system=system)
             emit(
                 "first_path",
                 room=room_name,

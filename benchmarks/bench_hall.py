@@ -24,13 +24,16 @@ from _common import emit
 
 import analysis
 from placement import seed_then_pso
-from simulation import Room, Signal
+from simulation import Room, System
 
 
-def designs(room: Room) -> dict[str, Room]:
-    """The hall with the paper's signal (and the hall's threshold) and with its own."""
-    paper = Signal(receiver=dataclasses.replace(Signal().receiver, false_alarm=1e-3))
-    return {"paper": dataclasses.replace(room, signal=paper), "hall": room}
+def designs(path: str) -> dict[str, System]:
+    """The paper's system (with the hall's threshold) and the hall file's own."""
+    paper = System.paper()
+    paper = dataclasses.replace(
+        paper, receiver=dataclasses.replace(paper.receiver, false_alarm=1e-3), name="custom"
+    )
+    return {"paper": paper, "hall": System.from_toml(path)}
 
 
 def summary(block: dict) -> dict:
@@ -45,13 +48,15 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--designs", nargs="+", default=["paper", "hall"])
     args = ap.parse_args()
-    hall = Room.from_toml("examples/hall.toml")
-    for name, room in designs(hall).items():
+    room = Room.from_toml("examples/hall.toml")
+    for name, system in designs("examples/hall.toml").items():
         if name not in args.designs:
             continue
         t0 = time.perf_counter()
         with ProcessPoolExecutor(args.workers) as ex:
-            res = seed_then_pso(room, args.anchors, rng=args.seed, executor=ex, progress=False)
+            res = seed_then_pso(
+                room, args.anchors, rng=args.seed, executor=ex, progress=False, system=system
+            )
         seconds = time.perf_counter() - t0
         v = res.validation.to_dict()
         emit(
@@ -59,15 +64,15 @@ def main() -> None:
             design=name,
             M=args.anchors,
             seed=args.seed,
-            reach_m=room.reach,
-            chirp_ms=room.signal.chirp.duration * 1e3,
+            reach_m=system.reach(room.speed_of_sound),
+            chirp_ms=system.chirp.duration * 1e3,
             plan_seconds=seconds,
             phases=res.timings,
             zone=summary(v),
             held_out_grid=summary(v["held_out"]["grid"]),
             held_out_random=summary(v["held_out"]["random"]),
             mounting=summary(v["mounting"]),
-            covered_share=analysis.covered_share(room, res.anchors, room.grid()),
+            covered_share=analysis.covered_share(room, res.anchors, room.grid(), system=system),
             reach_exceeded=res.settings.reach["exceeded"],
             anchors=res.anchors.tolist(),
         )

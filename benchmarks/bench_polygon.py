@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from placement import candidate_grid, naive_layout  # noqa: E402
 from placement.rangetable import range_table  # noqa: E402
-from simulation import Room  # noqa: E402
+from simulation import Room, System  # noqa: E402
 from simulation.evaluation import RangingScene  # noqa: E402
 from simulation.multipath import compute_paths  # noqa: E402
 from simulation.polyhedral import images, reflectors  # noqa: E402
@@ -126,12 +126,12 @@ def peer(n_nodes: int) -> None:
         t0 = time.perf_counter()
         wp, los_peer = pra_general_windows(room, a, p)
         t_peer = time.perf_counter() - t0
-        dsp = dsp_for(room.signal.chirp, room.signal.receiver, "float64")
+        paper = System.paper()  # the peer simulates the paper's signal
+        dsp = dsp_for(paper.chirp, paper.receiver, "float64")
         compute_paths(room, a[:1], p[:1], directivity="omni")  # compile
         t0 = time.perf_counter()
         paths = compute_paths(room, a, p, directivity="omni")
-        w = received_windows(paths, room.speed_of_sound, room.signal.chirp,
-                             room.signal.receiver)  # fmt: skip
+        w = received_windows(paths, room.speed_of_sound, paper.chirp, paper.receiver)
         t_ours = time.perf_counter() - t0
         r_ours = dsp.ranges(w, room.speed_of_sound)
         t_dsp = time.perf_counter() - t0 - t_ours
@@ -152,13 +152,14 @@ def peer(n_nodes: int) -> None:
 def obstacle_order(n_nodes: int) -> None:
     for name in ("l-shaped-lab", "warehouse-aisles"):
         room = Room.from_toml(ROOT / f"examples/{name}.toml")
+        system = System.from_toml(ROOT / f"examples/{name}.toml")  # its [system], if any
         a = naive_layout(room, 8)
         p = room.grid()[np.linspace(0, len(room.grid()) - 1, n_nodes).astype(int)]
         full = None
         for order in (room.max_order, 2, 1, 0):
             r = dataclasses.replace(room, obstacle_order=order)
             t0 = time.perf_counter()
-            scene = RangingScene(r, a, p)
+            scene = RangingScene(r, a, p, system=system)
             seconds = time.perf_counter() - t0
             ranges = scene.ranges(noise=False)
             if full is None:

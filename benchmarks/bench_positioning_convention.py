@@ -3,9 +3,10 @@
 Run: python benchmarks/bench_positioning_convention.py [--layout DIR] [--draws 10]
      python benchmarks/bench_positioning_convention.py --runs RUNS.jsonl [...] [--draws 10]
 
-Every figure of a plan solves positions one way: started inside the room (its centre, or
-the linear solution when that lies in the room), every iterate kept inside the room
-(``simulation.positioning.KEEP_IN_ROOM``). For the layout of ``DIR/layout.json`` (default:
+A system's positioning solves positions one of two ways: started inside the room (its
+centre, or the linear solution when that lies in the room) and either kept inside it
+(``Positioning(keep_in_room=True)``, the recommended system's) or not (the paper's). For the
+layout of ``DIR/layout.json`` (default:
 the committed techtile example) this prints one JSON line per convention with σ / mean /
 P95 (m) on the same ranges:
 

@@ -42,10 +42,10 @@ from _common import emit
 
 from placement.rangetable import mounted_points
 from placement.validation import random_nodes
-from simulation import Room, Signal
+from simulation import Room, System
 from simulation.evaluation import RangingScene, evaluate_layout
 from simulation.positioning import locate
-from simulation.signal import closing_window
+from simulation.system import closing_window
 
 ALL = ("floor", "ceiling", "south", "north", "west", "east")
 ROOMS = {
@@ -56,9 +56,9 @@ ROOMS = {
 }
 
 
-def design(window_ms: float, pick: str) -> Signal:
-    """The window of ``window_ms`` ending with the chirp, with ``pick``."""
-    return closing_window(Signal(), window_ms * 1e-3, pick)
+def design(window_ms: float, pick: str) -> System:
+    """The paper's system with a window of ``window_ms`` ending with the chirp, ``pick``."""
+    return closing_window(System.paper(), window_ms * 1e-3, pick)
 
 
 def stats(errors) -> dict:
@@ -73,7 +73,7 @@ def stats(errors) -> dict:
     }
 
 
-def field_errors(room: Room, anchors, draws: int, seed: int) -> np.ndarray:
+def field_errors(room: Room, system: System, anchors, draws: int, seed: int) -> np.ndarray:
     """(draws, 300) errors at random tag points with the anchors mounted within 3 cm."""
     ids = np.arange(len(anchors))
     out = []
@@ -82,7 +82,7 @@ def field_errors(room: Room, anchors, draws: int, seed: int) -> np.ndarray:
         rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(11, d)))
         nodes = random_nodes(room, 300, rng)
         mounted = mounted_points(room, anchors, ids, d, 0.03, False, seed)
-        scene = RangingScene(room, mounted, nodes)
+        scene = RangingScene(room, mounted, nodes, system=system)
         x = locate(anchors, scene.ranges(rng), region=region)
         out.append(np.linalg.norm(x - nodes, axis=-1))
     return np.array(out)
@@ -104,10 +104,9 @@ def peer(n_nodes: int, windows, picks, seed: int) -> None:
         nodes = random_nodes(base, n_nodes, rng)
         for w in windows:
             sig = design(w, "paper")
-            room = dataclasses.replace(base, signal=sig)
-            c = room.speed_of_sound
-            ours = received_windows(compute_paths(room, a, nodes), c, receiver=sig.receiver)
-            theirs = pra_windows(room, a, nodes, receiver=sig.receiver)
+            c = base.speed_of_sound
+            ours = received_windows(compute_paths(base, a, nodes), c, receiver=sig.receiver)
+            theirs = pra_windows(base, a, nodes, receiver=sig.receiver)
             rel = np.abs(ours - theirs).max(axis=-1) / np.abs(ours).max(axis=-1)
             for pick in picks:
                 rx = dataclasses.replace(sig.receiver, pick=pick)
@@ -149,10 +148,11 @@ def main() -> None:
                 if args.own and name != "paper" and name != f"{w:g}ms-{pick}":
                     continue
                 sig = design(w, pick)
-                room = dataclasses.replace(ROOMS[room_name], signal=sig)
+                room = ROOMS[room_name]
                 t0 = time.perf_counter()
-                ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed)
-                field = field_errors(room, anchors, args.field_draws, args.seed)
+                ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed,
+                                     system=sig)  # fmt: skip
+                field = field_errors(room, sig, anchors, args.field_draws, args.seed)
                 emit(
                     "receiver",
                     room=room_name,

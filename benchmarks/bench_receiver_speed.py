@@ -24,7 +24,6 @@ after the other: one JSON line each with its seconds, and the ratio.
 """
 
 import argparse
-import dataclasses
 import json
 import time
 
@@ -33,27 +32,29 @@ from _common import best_time, emit
 
 from placement.rangetable import _columns, node_draws
 from placement.surfaces import candidate_grid, naive_layout
-from simulation import Room, Signal
+from simulation import Room, System
 from simulation.evaluation import RangingScene, evaluate_layout
-from simulation.signal import closing_window
+from simulation.system import closing_window
 
 
-def figures(room: Room, anchors, repeat: int) -> dict:
-    scene = RangingScene(room, anchors)
+def figures(room: Room, system: System, anchors, repeat: int) -> dict:
+    scene = RangingScene(room, anchors, system=system)
     rng = np.random.default_rng(0)
     n = scene.windows.shape[0] * scene.windows.shape[1]
     out = {
-        "synthesis_us": best_time(lambda: RangingScene(room, anchors), repeat) / n * 1e6,
+        "synthesis_us": best_time(lambda: RangingScene(room, anchors, system=system), repeat)
+        / n
+        * 1e6,
         "noise_us": best_time(lambda: scene.noise(rng), repeat) / n * 1e6,
     }
     w = scene.noisy_windows(rng)
     out["dsp_us"] = best_time(lambda: scene.dsp.picks(w), repeat) / n * 1e6
     out["evaluation_s"] = best_time(
-        lambda: evaluate_layout(room, anchors, realizations=2, rng=0), repeat
+        lambda: evaluate_layout(room, anchors, realizations=2, rng=0, system=system), repeat
     )
     nodes = node_draws(room, room.grid(), 3, 2, 0)
     cands = candidate_grid(room, 0.4)[:16]
-    spec = dict(exact_draws=2, mount_tolerance=0.03, seed=0, precision="float32")
+    spec = dict(exact_draws=2, mount_tolerance=0.03, seed=0, precision="float32", system=system)
     t = best_time(lambda: _columns(room, cands, np.arange(16), nodes, spec), repeat)
     out["table_us"] = t / (16 * nodes.shape[1] * 3) * 1e6
     return out
@@ -66,17 +67,18 @@ def plans(workers: int) -> None:
 
     base = Room.techtile()
     designs = {
-        "1ms-paper": Signal(),
-        "20ms-first-path": closing_window(Signal(), 0.02, "first-path"),
+        "1ms-paper": System.paper(),
+        "20ms-first-path": closing_window(System.paper(), 0.02, "first-path"),
     }
     seconds = {}
     for label, sig in designs.items():
-        room = dataclasses.replace(base, signal=sig)
         with WorkerPool(workers) as pool:
             t0 = time.perf_counter()
             res = seed_then_pso(
-                room,
+                base,
                 8,
+                system=sig,
+                cost="variance",
                 rng=0,
                 executor=pool,
                 progress=False,
@@ -106,16 +108,16 @@ def main() -> None:
         anchors = naive_layout(base, 8)
     ref = None
     for w in args.windows:
-        room = dataclasses.replace(base, signal=closing_window(Signal(), w * 1e-3))
-        figures(room, anchors, 1)  # build the DSP, compile, warm the caches
-        f = figures(room, anchors, args.repeat)
+        system = closing_window(System.paper(), w * 1e-3)
+        figures(base, system, anchors, 1)  # build the DSP, compile, warm the caches
+        f = figures(base, system, anchors, args.repeat)
         ref = f if ref is None else ref
-        rx = room.signal.receiver
+        rx = system.receiver
         emit(
             "receiver_speed",
             window_ms=w,
             samples=rx.window,
-            dsp_form=RangingScene(room, anchors[:1], base.grid()[:1]).dsp.form,
+            dsp_form=RangingScene(base, anchors[:1], base.grid()[:1], system=system).dsp.form,
             **f,
             **{f"{k}_ratio": f[k] / ref[k] for k in f},
         )

@@ -225,3 +225,48 @@ def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
         if d < best:
             best, bx, by = d, qx, qy
     p[0], p[1] = bx, by
+
+
+@numba.njit(cache=True)
+def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
+    """x (3,) the linear solution of the heard anchors' squared-range differences (the
+    normal equations S x = g, solved by cofactors) for anchors ab (M, 3) and ranges rho
+    (M,) (NaN: not heard); False, x untouched, with fewer than 4 heard or when they are
+    coplanar (det S ≤ ``coplanar`` · (tr S)³)."""
+    n = 0
+    m0 = m1 = m2 = ma2 = mr2 = 0.0
+    for j in range(ab.shape[0]):
+        if rho[j] == rho[j]:
+            n += 1
+            m0 += ab[j, 0]
+            m1 += ab[j, 1]
+            m2 += ab[j, 2]
+            ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
+            mr2 += rho[j] * rho[j]
+    if n < 4:
+        return False
+    m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
+    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
+    for j in range(ab.shape[0]):
+        if rho[j] == rho[j]:
+            c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
+            rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (rho[j] * rho[j] - mr2)
+            s00 += c0 * c0
+            s01 += c0 * c1
+            s02 += c0 * c2
+            s11 += c1 * c1
+            s12 += c1 * c2
+            s22 += c2 * c2
+            g0 += c0 * rhs
+            g1 += c1 * rhs
+            g2 += c2 * rhs
+    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    tr = s00 + s11 + s22
+    if not det > coplanar * tr * tr * tr:  # coplanar: no linear solution
+        return False
+    x[0] = (c00 * g0 + c01 * g1 + c02 * g2) / det
+    x[1] = (c01 * g0 + c11 * g1 + c12 * g2) / det
+    x[2] = (c02 * g0 + c12 * g1 + c22 * g2) / det
+    return True

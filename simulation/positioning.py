@@ -34,7 +34,7 @@ import numba
 import numpy as np
 
 from simulation import checks, degeneracy
-from simulation.least_squares import lm_rows
+from simulation.least_squares import linear_fix, lm_rows
 from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, robust_rows, thresholds
 
 logger = logging.getLogger(__name__)
@@ -380,55 +380,16 @@ def _fixable(a: np.ndarray, owner: np.ndarray, heard: np.ndarray) -> np.ndarray:
 def _masked_starts(a, owner, R, lo, hi, rows, x):  # pragma: no cover - compiled
     """For the ``rows`` with missing ranges, the linear solution of the heard anchors'
     squared-range differences (module docstring) written into x (B, 3) when it lies in
-    [lo, hi] and the heard anchors are not coplanar (normal equations, cofactors)."""
+    [lo, hi] and the heard anchors are not coplanar (:func:`linear_fix`)."""
+    p = np.empty(3)
     for b in range(R.shape[0]):
-        if not rows[b]:
-            continue
-        ab, rho = a[owner[b]], R[b]
-        n = 0
-        m0 = m1 = m2 = ma2 = mr2 = 0.0
-        for j in range(ab.shape[0]):
-            if rho[j] == rho[j]:
-                n += 1
-                m0 += ab[j, 0]
-                m1 += ab[j, 1]
-                m2 += ab[j, 2]
-                ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
-                mr2 += rho[j] * rho[j]
-        if n < 4:
-            continue
-        m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
-        s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
-        for j in range(ab.shape[0]):
-            if rho[j] == rho[j]:
-                c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
-                rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (
-                    rho[j] * rho[j] - mr2
-                )
-                s00 += c0 * c0
-                s01 += c0 * c1
-                s02 += c0 * c2
-                s11 += c1 * c1
-                s12 += c1 * c2
-                s22 += c2 * c2
-                g0 += c0 * rhs
-                g1 += c1 * rhs
-                g2 += c2 * rhs
-        c00 = s11 * s22 - s12 * s12
-        c01 = s02 * s12 - s01 * s22
-        c02 = s01 * s12 - s02 * s11
-        c11 = s00 * s22 - s02 * s02
-        c12 = s01 * s02 - s00 * s12
-        c22 = s00 * s11 - s01 * s01
-        det = s00 * c00 + s01 * c01 + s02 * c02
-        tr = s00 + s11 + s22
-        if not det > 1e-18 * tr * tr * tr:  # coplanar heard anchors: start at the centre
-            continue
-        p0 = (c00 * g0 + c01 * g1 + c02 * g2) / det
-        p1 = (c01 * g0 + c11 * g1 + c12 * g2) / det
-        p2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
-        if lo[b, 0] <= p0 <= hi[b, 0] and lo[b, 1] <= p1 <= hi[b, 1] and lo[b, 2] <= p2 <= hi[b, 2]:
-            x[b, 0], x[b, 1], x[b, 2] = p0, p1, p2
+        if not rows[b] or not linear_fix(a[owner[b]], R[b], p, 1e-18):
+            continue  # coplanar heard anchors: the start stays at the centre
+        inside = True
+        for k in range(3):
+            inside = inside and lo[b, k] <= p[k] <= hi[b, k]
+        if inside:
+            x[b, 0], x[b, 1], x[b, 2] = p[0], p[1], p[2]
 
 
 def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols, poly=None):

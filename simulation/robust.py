@@ -36,7 +36,7 @@ import math
 import numba
 import numpy as np
 
-from simulation.least_squares import lm_solve, residuals, scratch
+from simulation.least_squares import linear_fix, lm_solve, residuals, scratch
 
 #: the quality of a fix (:class:`simulation.positioning.PositionFix` ``quality``)
 NO_FIX, UNVERIFIED, VERIFIED = 0, 1, 2
@@ -50,6 +50,9 @@ CANDIDATES = 2
 #: the most subsets the exhaustive search of step 4 solves for one fix (8 anchors: every
 #: subset of 7 and 6, and 60 of the 56 + … of 5 before it gives up)
 SUBSET_BUDGET = 96
+#: det(S) ≤ COPLANAR · tr(S)³ of the linear normal equations S: the subset's anchors are
+#: (nearly) coplanar and its linear solution is not used
+COPLANAR = 1e-12
 #: the iterations of one subset's solve: from its linear solution a consistent subset
 #: converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
@@ -167,7 +170,7 @@ def _subsets(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ft
             for i in range(h):
                 if mask[i]:
                     trial[heard[i]] = rho0[heard[i]]
-            if not _linear_fix(ab, trial, xt):  # coplanar anchors: from the first fit
+            if not linear_fix(ab, trial, xt, COPLANAR):  # coplanar anchors: from the first fit
                 xt[:] = x
             for k in range(3):
                 xt[k] = min(max(xt[k], lo[k]), hi[k])
@@ -216,49 +219,6 @@ def _next_combination(mask) -> bool:  # pragma: no cover - compiled
                 return True
             ones += 1
     return False
-
-
-@numba.njit(cache=True)
-def _linear_fix(ab, rho, x) -> bool:  # pragma: no cover - compiled
-    """x (3,) the linear solution of the heard anchors' squared-range differences (normal
-    equations); False when they are coplanar or fewer than 4."""
-    n = 0
-    m0 = m1 = m2 = ma2 = mr2 = 0.0
-    for j in range(ab.shape[0]):
-        if rho[j] == rho[j]:
-            n += 1
-            m0 += ab[j, 0]
-            m1 += ab[j, 1]
-            m2 += ab[j, 2]
-            ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
-            mr2 += rho[j] * rho[j]
-    if n < 4:
-        return False
-    m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
-    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
-    for j in range(ab.shape[0]):
-        if rho[j] == rho[j]:
-            c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
-            rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (rho[j] * rho[j] - mr2)
-            s00 += c0 * c0
-            s01 += c0 * c1
-            s02 += c0 * c2
-            s11 += c1 * c1
-            s12 += c1 * c2
-            s22 += c2 * c2
-            g0 += c0 * rhs
-            g1 += c1 * rhs
-            g2 += c2 * rhs
-    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
-    tr = s00 + s11 + s22
-    if not det > 1e-12 * tr * tr * tr:  # coplanar: no linear solution
-        return False
-    x[0] = (c00 * g0 + c01 * g1 + c02 * g2) / det
-    x[1] = (c01 * g0 + c11 * g1 + c12 * g2) / det
-    x[2] = (c02 * g0 + c12 * g1 + c22 * g2) / det
-    return True
 
 
 @numba.njit(cache=True)

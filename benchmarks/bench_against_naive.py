@@ -1,0 +1,57 @@
+"""A planned layout against the naive and the corners layouts of the same room, with the
+same system (BENCHMARKS.md, "Rooms with obstacles").
+
+Run:
+
+    python benchmarks/bench_against_naive.py docs/examples/l-shaped-lab-recommended \\
+        --room examples/l-shaped-lab.toml --system recommended
+
+The plan's layout (RESULT_DIR/layout.json), ``placement.naive_layout(room, M)`` and the
+room's corners layout are each evaluated in the field (the plan's validation's field check:
+``--draws`` draws of 300 random tags in the zones with the anchors mounted within 3 cm, one
+noise realization, the same streams for every layout). One JSON line per layout: median,
+mean, P95, RMS and the share of verified fixes, and the RMS error's reduction against the
+plan's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from _common import emit
+
+from placement import naive_layout
+from placement.validation import field_errors
+from simulation import Room, System
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("result_dir")
+    ap.add_argument("--room", required=True)
+    ap.add_argument("--system", default="recommended", help="a preset or a TOML file")
+    ap.add_argument("--draws", type=int, default=10)
+    args = ap.parse_args()
+    room = Room.from_toml(args.room)
+    system = (System.from_toml(args.system) if args.system.endswith(".toml")
+              else System.preset(args.system))  # fmt: skip
+    planned = np.array(json.loads((Path(args.result_dir) / "layout.json").read_text())["anchors"])
+    layouts = {"planned": planned, "naive": naive_layout(room, len(planned)),
+               "corners": room.corners_layout()}  # fmt: skip
+    rms = {}
+    for name, a in layouts.items():
+        E = np.concatenate([field_errors(room, a, 300, 0.03, d, 7, system=system)
+                            for d in range(args.draws)], axis=1)  # fmt: skip
+        e = E[0][np.isfinite(E[0])]
+        rms[name] = float(np.sqrt(np.mean(e * e)))
+        emit("against_naive", room=room.name, system=system.name, layout=name, M=len(a),
+             median=float(np.median(e)), mean=float(e.mean()), p95=float(np.percentile(e, 95)),
+             rms=rms[name], verified=float(np.mean(E[1] > 0)),
+             rms_reduction_by_plan=1 - rms["planned"] / rms[name])  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
