@@ -56,6 +56,9 @@ COPLANAR = 1e-12
 #: the iterations of one subset's solve: from its linear solution a consistent subset
 #: converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
+#: a subset's first iterations: one whose normalized residual is then still above
+#: SCREEN_FACTOR times the test's threshold is far from consistent and is not solved on
+SUBSET_SCREEN, SCREEN_FACTOR = 5, 100.0
 
 
 def thresholds(false_alarm: float, M: int) -> np.ndarray:
@@ -95,6 +98,7 @@ def robust_rows(
     rho, trial = np.empty(M), np.empty(M)
     x, xt, xb = np.empty(3), np.empty(3), np.empty(3)
     score = np.empty(M)
+    drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
     for b in range(R.shape[0]):
         for j in range(M):
             used[b, j] = R[b, j] == R[b, j]
@@ -120,7 +124,7 @@ def robust_rows(
                 trial[:] = rho
                 trial[j] = np.nan
                 xt[:] = x
-                c, st, it = lm_solve(ab, trial, xt, lo[b], hi[b], bounded, poly, max_iter,
+                c, st, it = lm_solve(ab, trial, xt, lo[b], hi[b], bounded, poly, drop_iter,
                                      xtol, ftol, gtol, *work)  # fmt: skip
                 iters += it
                 Tj = 2.0 * c / (sigma * sigma)
@@ -174,10 +178,16 @@ def _subsets(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ft
                 xt[:] = x
             for k in range(3):
                 xt[k] = min(max(xt[k], lo[k]), hi[k])
-            c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
-                                 xtol, ftol, gtol, *work)  # fmt: skip
+            c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly,
+                                 min(max_iter, SUBSET_SCREEN), xtol, ftol, gtol, *work)  # fmt: skip
             iters += it
             Tk = 2.0 * c / (sigma * sigma)
+            if st == 0 and Tk <= SCREEN_FACTOR * thr[size - 3] and max_iter > SUBSET_SCREEN:
+                c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly,
+                                     min(max_iter, SUBSET_ITER) - SUBSET_SCREEN, xtol, ftol,
+                                     gtol, *work)  # fmt: skip
+                iters += it
+                Tk = 2.0 * c / (sigma * sigma)
             if Tk < best_T:
                 best_T = Tk
                 best_x[:] = xt
