@@ -13,14 +13,16 @@ schemes (Casas et al., 2006):
    the receiver);
 3. while the test fails and more than 4 anchors remain, drop one: the two anchors with the
    largest deleted residuals r_j² / (1 − h_jj) (h_jj the leverage of anchor j in the
-   linearized fit) are each left out and the position solved again from the current one;
-   the one whose removal leaves the smaller T is dropped;
+   linearized fit) are each left out and the position solved again from the current one
+   (at most :data:`SUBSET_ITER` iterations); the one whose removal leaves the smaller T is
+   dropped;
 4. when that ends without 5 consistent anchors (two or more echoes can pull the first fit
    so far that the deleted residuals point at good anchors), search the subsets of the
    heard anchors exhaustively, the largest first, each solved from the linear solution of
    its own squared-range differences, down to 5 anchors; the first size with a subset that
    passes the test gives the fix (the subset with the smallest T), within a budget of
-   :data:`SUBSET_BUDGET` solves per fix;
+   :data:`SUBSET_BUDGET` solves per fix; a subset still above :data:`SCREEN_FACTOR` times
+   the threshold after :data:`SUBSET_SCREEN` iterations is not solved on;
 5. the fix is the least-squares position on the anchors kept.
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
