@@ -39,9 +39,6 @@ def default_cost(room, system) -> str:
     system. The variance rewards a layout whose every fix is off by the same metres (an
     echo that biases the ranges of a whole region); the RMS, √(mean² + σ²), does not
     (BENCHMARKS.md, "The cost in a user's room")."""
-    from simulation.room import Room
-    from simulation.system import System
-
     paper = system == System() and room == Room.techtile()
     return "variance" if paper else "rms"
 

@@ -200,18 +200,10 @@ def locate(
     and NaN. Ranges below −1 m (a noisy range may be slightly negative), above 1e5 m or
     infinite raise ``ValueError``.
     """
-    a, rho, max_iter = _check_input(
-        anchors,
-        ranges,
-        max_iter,
-        (xtol, ftol, gtol),
-        {"bounded": bounded, "full_output": full_output},
-    )
-    checks.choice("method", method, METHODS)
-    poly = _floor_plan(floor_plan)
-    if method == "robust":
-        checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
-        checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
+    tols = (xtol, ftol, gtol)
+    flags = {"bounded": bounded, "full_output": full_output}
+    a, rho, max_iter = _check_input(anchors, ranges, max_iter, tols, flags)
+    poly = _check_method(method, floor_plan, range_sigma, false_alarm)
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
@@ -222,7 +214,6 @@ def locate(
     partial = ~np.all(heard, axis=1)
     x, lo, hi = _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded)
     start = x.copy()
-    tols = (xtol, ftol, gtol)
     x, cost, status, nit = _levenberg_marquardt(
         layouts, owner, R, x, lo, hi, bounded, int(max_iter), tols, poly
     )
@@ -235,17 +226,32 @@ def locate(
     if not np.all(converged):
         n = int(np.sum(~converged))
         logger.debug("locate: %d of %d nodes not converged (max_iter=%d)", n, len(R), max_iter)
-    out = x.reshape(*lead, 3)
     if not full_output:
-        return out
+        return x.reshape(*lead, 3)
+    return _position_fix(lead, x, converged, status, nit, cost, start, used, quality)
+
+
+def _check_method(method, floor_plan, range_sigma, false_alarm):
+    """The checked ``method`` and its settings (:func:`locate`); returns the floor plan
+    (K, 2) or None."""
+    checks.choice("method", method, METHODS)
+    poly = _floor_plan(floor_plan)
+    if method == "robust":
+        checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
+        checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
+    return poly
+
+
+def _position_fix(lead, x, converged, status, nit, cost, start, used, quality) -> PositionFix:
+    """The :class:`PositionFix` of the flat per-node arrays (N, ...) shaped to ``lead``."""
     return PositionFix(
-        x=out,
+        x=x.reshape(*lead, 3),
         converged=converged.reshape(lead),
         status=status.astype(int).reshape(lead),
         nit=nit.reshape(lead),
         cost=cost.reshape(lead),
         start=start.reshape(*lead, 3),
-        used=used.reshape(*lead, M),
+        used=used.reshape(*lead, used.shape[-1]),
         quality=quality.reshape(lead),
     )
 
