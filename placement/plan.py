@@ -46,7 +46,7 @@ from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
 from placement.plan_result import PlacementResult, PlanSettings
-from placement.progress import ProgressBar
+from placement.progress import ProgressBar, check_progress
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.rangetable import node_draws
 from placement.simselect import SearchOptions
@@ -79,7 +79,7 @@ def seed_then_pso(
     executor: Executor | None = None,
     checkpoint=None,
     callback=None,
-    progress: bool = True,
+    progress=True,
 ) -> PlacementResult:
     """Plan M anchors: range-table search → swarm → refinement → finalists → validation
     (module docstring); every argument is checked before any work.
@@ -121,7 +121,8 @@ def seed_then_pso(
     checkpoint : a file for the swarm's state after every iteration (the search's result
         beside it); rerunning with the same arguments resumes.
     callback : ``callback(PSOResult-like state)`` after every swarm iteration.
-    progress : tqdm progress bars on stderr for every long phase.
+    progress : tqdm progress bars on stderr for every long phase (True), none (False), or
+        a callable ``progress(phase, done, total)`` (:mod:`placement.progress`).
     """
     planner = Planner(room, M, system=system, cost=cost, initial=initial, search=search,
                       swarm=swarm,
@@ -215,7 +216,7 @@ class Planner:
             raise ValueError(
                 f"callback: must be a callable or None, got {checks.describe(callback)}"
             )
-        self.callback, self.progress = callback, checks.flag("progress", progress)
+        self.callback, self.progress = callback, check_progress(progress)
         self.table = _check_table(table, self.search.mount_tolerance)
         self.reach: dict[str, Any] = {}
         self.initial_layouts: list[InitialLayout] = []

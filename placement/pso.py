@@ -34,6 +34,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from placement import ties
+from placement.progress import CountingBar, check_progress
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, write_json_atomic
 from placement.surfaces import MAX_ANCHORS, project, random_layout
@@ -693,7 +694,7 @@ def _check_args(
     if chunksize is not None:
         chunksize = checks.count("chunksize", chunksize, low=1)
     seed = None if rng is None else streams.entropy("rng", rng)
-    progress = checks.flag("progress", progress)
+    progress = check_progress(progress)
     if callback is not None and not callable(callback):
         raise ValueError(f"callback: must be callable or None, got {checks.describe(callback)}")
     if cost_label is not None and not isinstance(cost_label, str):
@@ -761,7 +762,9 @@ def _start(room: Room, args: dict) -> _Swarm:
     return swarm
 
 
-def _progress_bar(progress: bool, total: int, initial: int):
+def _progress_bar(progress, total: int, initial: int):
+    if callable(progress):
+        return CountingBar(progress, total, initial)
     if not progress:
         return None
     from tqdm.auto import tqdm

@@ -207,6 +207,20 @@ def test_progress_bars_can_be_switched_off(capsys):
         assert phase in err
 
 
+def test_progress_can_be_a_function_of_phase_done_and_total(capsys):
+    seen = []
+    _plan(progress=lambda phase, done, total: seen.append((phase, done, total)))
+    assert capsys.readouterr().err == ""  # no bars when a function takes the reports
+    phases = list(dict.fromkeys(p for p, _, _ in seen))
+    assert phases == ["range table", "search", "swarm", "refinement", "finalists", "validation"]
+    for phase in phases:
+        done = [d for p, d, _ in seen if p == phase]
+        total = [t for p, _, t in seen if p == phase]
+        assert done == sorted(done) and done[-1] == total[-1] > 0, phase
+    with pytest.raises(ValueError, match="progress"):
+        _plan(progress="yes")
+
+
 def test_the_grid_check_solves_with_the_systems_positioning():
     """The grid check simulates the system it is given: its errors are those of
     ``evaluate_layout`` with that system on the same noise streams; the paper's system

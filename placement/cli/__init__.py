@@ -19,6 +19,7 @@ COMMANDS = (
     "export",
     "sheet",
     "stress",
+    "serve",
 )
 
 
@@ -75,6 +76,12 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # usage errors (one line, 2) and --help (0)
         return exc.code if isinstance(exc.code, int) else 2
+    return run_command(args)
+
+
+def run_command(args) -> int:
+    """Run parsed ``args`` (``args.func(args)``) as :func:`main` does: bad input prints one
+    line on stderr and returns 2, any other failure one line and 1; the exit code."""
     prefix = f"anchorplan {args.command}"
     handler = _Warnings(args.command)
     loggers = [logging.getLogger(n) for n in ("placement", "analysis", "simulation")]

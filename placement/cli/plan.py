@@ -243,16 +243,23 @@ def _check_args(args, room, system) -> dict:
     return opts
 
 
-def run(args) -> int:
-    """Run ``anchorplan plan`` on parsed ``args``; the exit status (0: done)."""
-    from placement.plan import seed_then_pso
-
+def prepare(args):
+    """(the output folder, the room, the system, the library's options) of parsed ``args``:
+    every number and file checked before any work (``args.cost`` "auto" resolved)."""
     out = output_dir("--out", args.out)
     room = load_room(args.room, args)
     system = load_system(args, room)
     if args.cost == AUTO:
         args.cost = default_cost(room, system)
-    opts = _check_args(args, room, system)
+    return out, room, system, _check_args(args, room, system)
+
+
+def run(args, progress=None) -> int:
+    """Run ``anchorplan plan`` on parsed ``args``; the exit status (0: done). ``progress``:
+    a callable ``progress(phase, done, total)`` instead of the bars (:mod:`placement.progress`)."""
+    from placement.plan import seed_then_pso
+
+    out, room, system, opts = prepare(args)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         executor = _executor(args, stack)
@@ -266,7 +273,8 @@ def run(args) -> int:
         print(describe_system(room, system), flush=True)
         res = seed_then_pso(room, args.anchors, system=system, cost=args.cost, **opts,
                             executor=executor,
-                            rng=args.seed, progress=not args.no_progress,
+                            rng=args.seed,
+                            progress=progress or not args.no_progress,
                             checkpoint=args.checkpoint)  # fmt: skip
     write_files({out / "result.json": res.to_json(indent=1) + "\n",
                  out / "layout.json": json_text({"anchors": res.anchors})})  # fmt: skip

@@ -1,0 +1,174 @@
+"""The planning page in a real browser (headless Chromium driven by Playwright): load the
+L-shaped lab, drag an anchor and see the coverage change, drop one into a column and read
+the command line's message, refuse M = 2, run a quick plan to the end (its progress
+surviving a reload), and download the mounting sheet.
+
+It needs a Chromium on the machine (Debian: ``apt-get install chromium``); where there is
+none it is skipped, saying so. CI installs one (``.ci/run``)."""
+
+from __future__ import annotations
+
+import shutil
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+CHROMIUM = next(
+    (
+        p
+        for p in (shutil.which("chromium"), shutil.which("chromium-browser"), "/usr/bin/chromium")
+        if p and Path(p).exists()
+    ),
+    None,
+)
+#: what Chromium needs in a sandboxed, offline machine (no GPU, no calls home)
+FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        CHROMIUM is None,
+        reason="no Chromium on this machine: the browser test "
+        "needs one (Debian: apt-get install chromium)",
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    import uvicorn
+
+    from placement.web.app import create_app
+    from placement.web.workspace import Workspace
+
+    ws = Workspace(tmp_path_factory.mktemp("work"), EXAMPLES / "l-shaped-lab.toml")
+    srv = uvicorn.Server(
+        uvicorn.Config(create_app(ws), host="127.0.0.1", port=0, log_level="warning")
+    )
+    thread = threading.Thread(target=srv.run, daemon=True)
+    thread.start()
+    for _ in range(200):
+        if srv.started:
+            break
+        time.sleep(0.05)
+    port = srv.servers[0].sockets[0].getsockname()[1]
+    yield f"http://127.0.0.1:{port}/", ws
+    if ws.plan is not None:
+        ws.plan.cancel()
+    srv.should_exit = True
+    thread.join(10)
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        pg = browser.new_page(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
+        errors = []
+        pg.on("pageerror", lambda e: errors.append(str(e)))
+        pg.goto(server[0])
+        pg.wait_for_selector("#covered-k")
+        yield pg
+        browser.close()
+        assert not errors, errors
+
+
+def _drag(page, index: int, to) -> None:
+    """Drag anchor ``index`` of the plan view to ``to`` (x, y) m."""
+    circle = page.locator(f'.anchor[data-index="{index}"][data-view="plan"] circle')
+    box = circle.bounding_box()
+    target = page.evaluate(
+        """([x, y]) => { const svg = document.getElementById("plan");
+          const r = svg.getBoundingClientRect(), vb = svg.viewBox.baseVal;
+          const s = vb.width / (state.room.size[0] + 0.8);
+          return [r.left + (x + 0.4) * s * r.width / vb.width,
+                  r.top + (state.room.size[1] + 0.4 - y) * s * r.height / vb.height]; }""",
+        list(to),
+    )
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(*target, steps=8)
+    page.mouse.up()
+
+
+def _row(page, index: int) -> str:
+    return page.locator("#anchors tbody tr").nth(index).inner_text()
+
+
+def test_drag_an_anchor_and_the_coverage_changes(page):
+    before = page.locator("#covered-k").inner_text(), page.get_attribute("#k-line", "d")
+    assert float(_row(page, 6).split()[3]) == 2.97  # anchor 6: on the ceiling, west
+    _drag(page, 6, (6.5, 1.5))  # to the ceiling of the bay's east end
+    page.wait_for_function(
+        "(() => { const c = document.querySelectorAll("
+        "'#anchors tbody tr')[6].cells;"
+        "return c[1].innerText === '6.50' && c[2].innerText === '1.50'; })()"
+    )
+    after = page.locator("#covered-k").inner_text(), page.get_attribute("#k-line", "d")
+    assert after != before
+    assert float(_row(page, 6).split()[3]) == 2.97  # still on the ceiling
+    assert page.locator("#error").is_hidden()
+
+
+def test_a_drop_into_a_column_shows_the_command_lines_message(page):
+    # anchor 0 sits on a wall at 1 m: a drop onto column-1's footprint is inside it
+    _drag(page, 0, (2.5, 1.5))
+    page.wait_for_selector("#error:not([hidden])")
+    text = page.locator("#error").inner_text()
+    assert text.startswith("error: anchors: anchor(s) [0] lie outside the room or in an obstacle")
+    assert "is inside an obstacle" in text
+
+
+def test_m_2_is_refused_with_the_command_lines_message(page):
+    page.fill("input[name=anchors]", "2")
+    page.click("#plan-run")
+    page.wait_for_function("document.getElementById('error').innerText.includes('--anchors')")
+    assert page.locator("#error").inner_text() == (
+        "error: --anchors: must be an integer in [4, 100], got 2"
+    )
+
+
+def test_a_room_file_that_does_not_parse_shows_the_command_lines_message(page, tmp_path):
+    from test_web import cli_error
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("size = [1, 2\n")
+    page.set_input_files("#room-upload", str(bad))
+    page.wait_for_function("document.getElementById('error').innerText.includes('TOML')")
+    cli = cli_error(["evaluate", "--room", str(bad), "--layout", "x.json", "--out", "o"])
+    assert page.locator("#error").inner_text().endswith(cli.split(": ", 1)[1])
+    assert "l-shaped-lab" in page.locator("#room-name").inner_text()  # the room stays
+
+
+def test_a_quick_plan_runs_to_the_end_and_its_sheet_downloads(page, server):
+    page.fill("input[name=anchors]", "4")
+    page.select_option("select[name=effort]", "quick")
+    page.click("#plan-run")
+    page.wait_for_selector(".phase progress")
+    page.reload()  # the progress is the server's: a reloaded page finds it
+    page.wait_for_selector(".phase progress", timeout=30_000)
+    assert "running" in page.locator("#plan-state").inner_text()
+    page.wait_for_selector("#plan-done", timeout=300_000)
+    page.wait_for_function("document.querySelectorAll('#anchors tbody tr').length === 4")
+    planned = server[1].plan.status()["result"]["anchors"]
+    rows = [[float(v) for v in _row(page, i).split()[1:4]] for i in range(4)]
+    assert rows == [[round(v, 2) for v in a] for a in planned]
+    with page.expect_download(timeout=120_000) as download:
+        page.click("#exports a[data-kind=sheet]")
+    path = download.value.path()
+    assert download.value.suggested_filename == "sheet.html"
+    text = Path(path).read_text()
+    assert "<html" in text.lower() and text.count("anchor") >= 4
