@@ -54,7 +54,8 @@ import numpy as np
 
 from simulation import checks
 from simulation.chirp import Chirp
-from simulation.positioning import FALSE_ALARM, METHODS, RANGE_SIGMA, locate
+from simulation.map_check import map_check, needs_check
+from simulation.positioning import FALSE_ALARM, METHODS, RANGE_SIGMA, PositionFix, locate
 from simulation.receiver import MIN_OVERLAP, Receiver, delay_span, dsp_form, signal_chain
 
 __all__ = ["MIN_OVERLAP", "PRESETS", "Positioning", "System", "as_system", "closing_window"]
@@ -99,10 +100,16 @@ class Positioning:
         with ``keep_in_room``)."""
         region = (np.zeros(3), np.asarray(room.size, dtype=float))
         poly = None if (room.is_shoebox or not self.keep_in_room) else room.floor_corners
-        return locate(anchors, ranges, method=self.method, region=region,
-                      bounded=self.keep_in_room, floor_plan=poly, max_iter=self.max_iter,
-                      range_sigma=self.range_sigma, false_alarm=self.false_alarm,
-                      full_output=full_output)  # fmt: skip
+
+        def solve(a, rho, full: bool = full_output):
+            return locate(a, rho, method=self.method, region=region, bounded=self.keep_in_room,
+                          floor_plan=poly, max_iter=self.max_iter, range_sigma=self.range_sigma,
+                          false_alarm=self.false_alarm, full_output=full)  # fmt: skip
+
+        if not (self.method == "robust" and self.keep_in_room and needs_check(room)):
+            return solve(anchors, ranges)
+        fix = _map_checked(room, anchors, ranges, solve(anchors, ranges, True), solve)
+        return fix if full_output else fix.x
 
     def describe(self) -> str:
         """One line: the method and whether positions are kept in the room."""
@@ -111,6 +118,26 @@ class Positioning:
             return f"least squares, {kept}"
         return (f"robust least squares (echoes rejected at range sigma {self.range_sigma:g} m), "
                 f"{kept}")  # fmt: skip
+
+
+def _map_checked(room, anchors, ranges, fix: PositionFix, solve) -> PositionFix:
+    """``fix`` (of ``solve(anchors, ranges)``) checked against the room's map
+    (:func:`simulation.map_check.map_check`), on flat rows and shaped back."""
+    a = np.asarray(anchors, dtype=float)
+    layouts = a.reshape(-1, a.shape[-2], 3)
+    lead, M = fix.quality.shape, a.shape[-2]
+    flat = {k: np.asarray(v).reshape(-1, *np.shape(v)[len(lead):]) for k, v in
+            dataclasses.asdict(fix).items()}  # fmt: skip
+    owner = np.repeat(np.arange(len(layouts)), len(flat["x"]) // len(layouts))
+
+    def again(sub_anchors, sub_ranges):
+        f = solve(sub_anchors, sub_ranges[:, None, :], True)
+        return {k: np.asarray(v).reshape(len(sub_ranges), *np.shape(v)[2:]) for k, v in
+                dataclasses.asdict(f).items()}  # fmt: skip
+
+    rho = np.asarray(ranges, dtype=float).reshape(-1, M)
+    out = map_check(room, layouts, owner, rho, flat, again)
+    return PositionFix(**{k: v.reshape(*lead, *v.shape[1:]) for k, v in out.items()})
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,19 @@ import pytest
 from simulation import Positioning, Room, locate
 from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, thresholds
 
-ANCHORS = np.array([[0, 0, 2.4], [8, 0, 2.4], [8, 4, 2.4], [0, 4, 2.4], [0, 0, 0.5],
-                    [8, 4, 0.5], [4, 0, 1.2], [4, 4, 1.8]], float)  # fmt: skip
+ANCHORS = np.array(
+    [
+        [0, 0, 2.4],
+        [8, 0, 2.4],
+        [8, 4, 2.4],
+        [0, 4, 2.4],
+        [0, 0, 0.5],
+        [8, 4, 0.5],
+        [4, 0, 1.2],
+        [4, 4, 1.8],
+    ],
+    float,
+)
 REGION = (np.zeros(3), np.array([8.0, 4.0, 2.4]))
 SIGMA = 0.01
 
@@ -52,8 +63,15 @@ def test_it_finds_the_consistent_subset_the_exhaustive_search_finds():
         echoes = rng.choice(8, size=trial % 4, replace=False)
         rho[echoes] += rng.uniform(0.3, 3.0, len(echoes))
         ref = _exhaustive(ANCHORS, rho)
-        fix = locate(ANCHORS, rho[None], method="robust", region=REGION, bounded=True,
-                     range_sigma=SIGMA, full_output=True)  # fmt: skip
+        fix = locate(
+            ANCHORS,
+            rho[None],
+            method="robust",
+            region=REGION,
+            bounded=True,
+            range_sigma=SIGMA,
+            full_output=True,
+        )
         assert ref is not None
         assert set(np.flatnonzero(fix.used[0])) == ref[1], trial
         assert fix.quality[0] == VERIFIED
@@ -68,8 +86,9 @@ def test_one_echo_is_found_with_five_anchors_and_not_with_four():
         a = ANCHORS[:k]
         rho = np.linalg.norm(x - a, axis=1) + 0.002 * rng.standard_normal(k)
         rho[1] += 1.5  # an echo
-        fix = locate(a, rho[None], method="robust", region=REGION, range_sigma=SIGMA,
-                     full_output=True)  # fmt: skip
+        fix = locate(
+            a, rho[None], method="robust", region=REGION, range_sigma=SIGMA, full_output=True
+        )
         if k == 5:  # the four others agree: the echo is dropped, the fix verified
             assert not fix.used[0, 1] and fix.used[0].sum() == 4
             assert fix.quality[0] == UNVERIFIED  # 4 anchors kept: no redundancy left
@@ -127,8 +146,16 @@ def test_the_robust_solver_equals_least_squares_without_echoes():
 def test_positions_kept_in_the_floor_plan_not_its_box():
     """An L-shaped room: a fix kept in the room never lands in the missing corner."""
     room = Room.from_corners([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], 3.0)
-    a = np.array([[0.03, 0.03, 2.9], [6.9, 0.03, 0.5], [6.9, 2.9, 2.9], [2.9, 5.9, 0.5],
-                  [0.03, 5.9, 2.9], [1.5, 0.03, 1.5]])  # fmt: skip
+    a = np.array(
+        [
+            [0.03, 0.03, 2.9],
+            [6.9, 0.03, 0.5],
+            [6.9, 2.9, 2.9],
+            [2.9, 5.9, 0.5],
+            [0.03, 5.9, 2.9],
+            [1.5, 0.03, 1.5],
+        ]
+    )
     rng = np.random.default_rng(6)
     x = np.array([[2.5, 3.5, 1.2]] * 300)  # near the inner corner
     rho = np.linalg.norm(x[:, None] - a[None], axis=-1) + 0.5 * rng.standard_normal((300, 6))
@@ -145,11 +172,14 @@ def test_positions_kept_in_the_floor_plan_not_its_box():
 
 @pytest.mark.parametrize(
     ("kw", "names"),
-    [({"method": "median"}, "method"), ({"method": "robust", "range_sigma": 0}, "range_sigma"),
-     ({"method": "robust", "range_sigma": -0.1}, "range_sigma"),
-     ({"method": "robust", "false_alarm": 0.7}, "false_alarm"),
-     ({"floor_plan": [[0, 0], [1, 1]]}, "floor_plan")],
-)  # fmt: skip
+    [
+        ({"method": "median"}, "method"),
+        ({"method": "robust", "range_sigma": 0}, "range_sigma"),
+        ({"method": "robust", "range_sigma": -0.1}, "range_sigma"),
+        ({"method": "robust", "false_alarm": 0.7}, "false_alarm"),
+        ({"floor_plan": [[0, 0], [1, 1]]}, "floor_plan"),
+    ],
+)
 def test_bad_input_names_the_argument(kw, names):
     with pytest.raises(ValueError, match=names):
         locate(ANCHORS, np.linalg.norm(ANCHORS - 1.0, axis=1)[None], region=REGION, **kw)
@@ -158,7 +188,96 @@ def test_bad_input_names_the_argument(kw, names):
 def test_too_few_anchors_are_refused_and_a_bad_positioning_too():
     with pytest.raises(ValueError, match="anchors"):
         locate(ANCHORS[:2], np.ones((1, 2)), method="robust")
-    for kw, name in (({"method": "lms"}, "method"), ({"range_sigma": 0.0}, "range_sigma"),
-                     ({"false_alarm": 1.0}, "false_alarm")):  # fmt: skip
+    for kw, name in (
+        ({"method": "lms"}, "method"),
+        ({"range_sigma": 0.0}, "range_sigma"),
+        ({"false_alarm": 1.0}, "false_alarm"),
+    ):
         with pytest.raises(ValueError, match=name):
             Positioning(**kw)
+
+
+# -- the map check (simulation.map_check) ---------------------------------------------------
+RACK_ROOM = Room(
+    size=(10.0, 10.0, 3.0),
+    name="rack",
+    obstacles=({"min": [4.0, 1.0, 0.0], "max": [4.5, 9.0, 3.0], "name": "rack"},),
+)
+WEST = np.array(
+    [[0.03, 1.0, 1.0], [0.03, 9.0, 2.5], [3.5, 0.03, 2.9], [1.0, 9.97, 0.5], [2.0, 5.0, 2.97]]
+)
+EAST = np.array(
+    [
+        [9.97, 2.0, 1.0],
+        [9.97, 8.0, 2.5],
+        [7.0, 1.5, 2.97],
+        [6.0, 8.5, 0.3],
+        [8.0, 5.0, 2.97],
+        [9.97, 5.0, 0.2],
+    ]
+)
+MAPPED = Positioning(method="robust", keep_in_room=True, range_sigma=0.01)
+
+
+def test_a_consistent_set_the_fix_cannot_see_is_not_verified():
+    from simulation.polyhedral import line_of_sight
+
+    fake = np.array([2.0, 3.0, 1.2])  # west of the rack: every east anchor is hidden from it
+    assert not line_of_sight(RACK_ROOM, EAST, fake[None]).any()
+    ranges = np.linalg.norm(EAST - fake, axis=1)[None]
+    alone = locate(EAST, ranges, method="robust", range_sigma=0.01, full_output=True)
+    assert alone.verified.all()  # the ranges agree: the residual test alone vouches for it
+    fix = MAPPED.locate(RACK_ROOM, EAST, ranges, full_output=True)
+    assert not fix.verified.any() and fix.quality[0] == UNVERIFIED
+
+
+def test_echoes_that_agree_on_a_hidden_point_are_dropped_and_the_true_fix_found():
+    from simulation.map_check import map_check
+
+    tag, fake = np.array([3.0, 6.0, 1.2]), np.array([2.0, 3.0, 1.2])
+    anchors = np.concatenate([WEST, EAST])
+    # five direct ranges agree on the tag; six "echoes" agree on the fake point, and the
+    # fix handed to the check rests on them (verified by the residual test)
+    ranges = np.concatenate(
+        [np.linalg.norm(WEST - tag, axis=1), np.linalg.norm(EAST - fake, axis=1)]
+    )[None]
+    fix = {
+        "x": fake[None],
+        "used": np.array([[False] * 5 + [True] * 6]),
+        "quality": np.array([VERIFIED], dtype=np.int8),
+        "cost": np.zeros(1),
+    }
+
+    def solve(a, rho):
+        f = MAPPED.locate(RACK_ROOM, a[0], rho, full_output=True)
+        return {"x": f.x, "used": f.used, "quality": f.quality, "cost": f.cost}
+
+    out = map_check(RACK_ROOM, anchors[None], np.zeros(1, int), ranges, fix, solve)
+    np.testing.assert_allclose(out["x"][0], tag, atol=1e-6)
+    assert out["quality"][0] == VERIFIED and out["used"][0].tolist() == [True] * 5 + [False] * 6
+    assert fix["x"][0].tolist() == fake.tolist()  # the input is not changed
+    # with fewer than 5 anchors left the old fix stays, unverified
+    out = map_check(
+        RACK_ROOM,
+        anchors[None, 1:],
+        np.zeros(1, int),
+        ranges[:, 1:],
+        {k: v[:, 1:] if k == "used" else v for k, v in fix.items()},
+        solve,
+    )
+    assert out["quality"][0] == UNVERIFIED and out["x"][0].tolist() == fake.tolist()
+
+
+def test_the_map_check_keeps_the_rows_of_many_layouts_apart():
+    tag = np.array([3.0, 6.0, 1.2])
+    anchors = np.concatenate([WEST, EAST[:1]])
+    ranges = np.linalg.norm(anchors - tag, axis=1)[None]
+    one = MAPPED.locate(RACK_ROOM, anchors, ranges, full_output=True)
+    many = MAPPED.locate(
+        RACK_ROOM, np.stack([anchors, anchors]), np.stack([ranges, ranges]), full_output=True
+    )
+    np.testing.assert_allclose(many.x[1], one.x, atol=1e-9)
+    assert many.quality.shape == (2, 1) and MAPPED.locate(RACK_ROOM, anchors, ranges).shape == (
+        1,
+        3,
+    )
