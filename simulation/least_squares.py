@@ -12,6 +12,11 @@ position in a cut-out corner of an L-shaped room is not in the room.
 
 Statuses (modelled on scipy ``least_squares``): 1 gradient small, 2 cost change small,
 3 step small, 4 zero residual, 0 iteration limit.
+
+The solve's helpers are compiled into it, and the solve into :func:`lm_rows` (numba's
+``inline="always"``; an inlined function takes its arguments one by one, no ``*args``):
+the loop then knows the scratch arrays apart and runs about a third faster, with the same
+floating-point operations in the same order (the same results, bit for bit).
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def residuals(x, a, rho, r, u):  # pragma: no cover - compiled
     """Residuals r (M,) and unit vectors u (M, 3) from the anchors a (M, 3) to the point
     x (3,) for ranges rho (M,); returns ½Σr²."""
@@ -41,7 +46,7 @@ def residuals(x, a, rho, r, u):  # pragma: no cover - compiled
     return 0.5 * cost
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
     """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
     because the descent direction −Jᵀr points out of the box there."""
@@ -52,7 +57,7 @@ def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
         free[k] = not ((x[k] <= lo[k] and g > 0) or (x[k] >= hi[k] and g < 0))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
     """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
     (a held one, ``free[k]`` False, gets δ_k = 0); returns (g0, g1, g2) = Jᵀr with the held
@@ -102,18 +107,19 @@ def lm_rows(
     layouts a (L, M, 3) with row b's ``owner[b]``, starts x0 (B, 3), bounds lo, hi (B, 3);
     written into xs (B, 3), costs (B,), status (B,) and nit (B,)."""
     x = np.empty(3)
-    work = scratch(R.shape[1])
+    r, u, rn, un, xn, step, free = scratch(R.shape[1])
     for b in range(R.shape[0]):
         x[:] = x0[b]
-        cost, st, it = lm_solve(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly, max_iter,
-                                xtol, ftol, gtol, *work)  # fmt: skip
+        cost, st, it = _lm_solve(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly, max_iter,
+                                 xtol, ftol, gtol, r, u, rn, un, xn, step, free)  # fmt: skip
         xs[b] = x
         costs[b], status[b], nit[b] = cost, st, it
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def scratch(M):  # pragma: no cover - compiled
-    """The scratch arrays of :func:`lm_solve` for M anchors: r, u, rn, un, xn, step, free."""
+    """The scratch arrays of :func:`lm_solve` for M anchors: r, u, rn, un, xn, step, free
+    (r, u and rn, un swap roles in a solve: none holds a result after it)."""
     return (np.empty(M), np.empty((M, 3)), np.empty(M), np.empty((M, 3)), np.empty(3),
             np.empty(3), np.ones(3, dtype=np.bool_))  # fmt: skip
 
@@ -125,6 +131,17 @@ def lm_solve(
     """Solve one position in place in x (3,) from ranges rho (M,) of anchors ab (M, 3)
     (module docstring; r … free: :func:`scratch`); returns (cost ½Σr², status,
     iterations)."""
+    return _lm_solve(ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn,
+                     un, xn, step, free)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def _lm_solve(
+    ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step, free
+):  # pragma: no cover - compiled
+    """:func:`lm_solve`, compiled into its caller: :func:`lm_rows` (its loop then knows the
+    scratch arrays apart) and :func:`lm_solve` itself (one compiled solve for the other
+    callers, which compile faster calling it than holding its loop)."""
     free[:] = True
     if bounded and poly.shape[0] >= 3:
         into_floor_plan(x, poly)
@@ -162,7 +179,8 @@ def lm_solve(
         small_f = ok and actual <= ftol * cost and pred <= ftol * cost
         # accept / reject with Nielsen's damping update
         if ok:
-            x[:], r[:], u[:, :] = xn, rn, un
+            x[:] = xn
+            r, rn, u, un = rn, r, un, u  # the scratch arrays swap roles
             cost = cn
             lam *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
             nu = 2.0

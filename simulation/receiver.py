@@ -77,6 +77,7 @@ import functools
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.fft
 
@@ -554,7 +555,7 @@ class Dsp:
         unsure = margin.runner_up(lp, k, curve, w) if verify else np.zeros(len(k), dtype=bool)
         if self.receiver.pick == "first-path":
             k = self._first_path(lp, k, sigma, margin, unsure, curve)
-        k = snap_to_peak(curve, k, self.snap_width)
+        k = _snap_rows(curve, k, self.snap_width)  # snap_to_peak, compiled
         peak = curve[np.arange(len(k)), k].astype(float)
         if verify and self.threshold and sigma is not None:
             level = self.threshold * np.asarray(sigma) * self.noise_gain[k]
@@ -725,47 +726,118 @@ class _Margins:
         self.curve = SINGLE_MARGIN_RAW * curve.max(axis=1).astype(float)
 
     def runner_up(self, values: np.ndarray, k: np.ndarray, curve: np.ndarray, width: int):
-        """(B,) the argmax k of each row of ``values`` (low-passed) could snap elsewhere:
-        the lags within the margin of its value are not one run within :data:`NEAR_TOP` of
-        k, or the run's ends snap to different raw peaks of ``curve`` (between them every
-        lag snaps to the same peak)."""
-        rows = np.arange(len(k))[:, None]
-        n = values.shape[1]
-        local = np.clip(k[:, None] + np.arange(-NEAR_TOP, NEAR_TOP + 1), 0, n - 1)
-        near_values = values[rows, local]
-        values[rows, local] = -np.inf
-        far = values.max(axis=1)
-        values[rows, local] = near_values
-        floor = (values[rows[:, 0], k].astype(float) - self.lowpassed)[:, None]
-        near = near_values >= floor
-        first = np.argmax(near, axis=1)
-        last = near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)
-        unsure = (far >= floor[:, 0]) | (near.sum(axis=1) != last - first + 1)
-        unsure |= (first == 0) | (last == near.shape[1] - 1)  # the run may reach further
-        first, last = local[rows[:, 0], first], local[rows[:, 0], last]
-        apart = snap_to_peak(curve, first, width) != snap_to_peak(curve, last, width)
-        return unsure | apart | self.snap(curve, first, last, width)
+        """(B,) the argmax k (B,) of each row of ``values`` (B, Nc, low-passed) could snap
+        elsewhere: the lags within the margin of its value are not one run within
+        :data:`NEAR_TOP` of k, or the run's ends snap to different raw peaks of ``curve``
+        (B, Nc) (between them every lag snaps to the same peak), or a local maximum of the
+        raw curve within ``width`` samples of the run could move (:func:`_runner_up_rows`,
+        compiled)."""
+        near = np.full((len(k), 2 * NEAR_TOP + 1), -np.inf, dtype=values.dtype)
+        _swap_near(values, k, NEAR_TOP, near)  # the lags within NEAR_TOP of k now −inf
+        far = values.max(axis=1)  # the largest value beyond them (NaN: one is NaN)
+        _swap_near(values, k, NEAR_TOP, near)  # and back
+        return _runner_up_rows(values, k, far, curve, self.lowpassed, self.curve, width, NEAR_TOP)
 
     def crosses(self, values: np.ndarray, level: np.ndarray) -> np.ndarray:
         """(B,) a lag of ``values`` (B, Nc) lies within the margin of the row's ``level``."""
         near = np.abs(values - level[:, None].astype(values.dtype))
         return np.any(near <= self.lowpassed[:, None], axis=1)
 
-    def snap(self, curve: np.ndarray, first: np.ndarray, last: np.ndarray, width: int):
-        """(B,) a local maximum of the raw curve from ``first`` − ``width`` to ``last`` +
-        ``width`` (:func:`snap_to_peak`) could move: two neighbouring samples there differ by
-        less than the margin and neither falls off towards its other side by more."""
-        n = curve.shape[1]
-        span = int(np.max(last - first)) if len(first) else 0
-        idx = first[:, None] + np.arange(-width - 2, span + width + 3)
-        inside = idx[:, 1:-2] <= (last + width + 1)[:, None]
-        v = curve[np.arange(len(first))[:, None], np.clip(idx, 0, n - 1)].astype(float)
-        m = self.curve[:, None]
-        d = np.diff(v, axis=1)  # d[i] = v[i + 1] − v[i]
-        # the pair (i + 1, i + 2) is level, the sample before it rises into it and the one
-        # after it falls from it (each to within the margin): a top the snap may take
-        flat_top = (np.abs(d[:, 1:-1]) <= m) & (d[:, :-2] >= -m) & (d[:, 2:] <= m)
-        return np.any(flat_top & inside, axis=1)
+
+@numba.njit(cache=True)
+def _nearest_peak(a, k, width):  # pragma: no cover - compiled
+    """The local maximum (a[i − 1] < a[i] ≥ a[i + 1]) of the row a (n,) nearest to the index
+    k, the lower index on ties; k itself when there is none within ``width`` samples (one
+    row of :func:`snap_to_peak`)."""
+    n = a.shape[0]
+    for d in range(width + 1):
+        for i in (k - d, k + d):
+            if 1 <= i <= n - 2 and a[i] > a[i - 1] and a[i] >= a[i + 1]:
+                return i
+    return k
+
+
+@numba.njit(cache=True)
+def _snap_rows(curve, k, width):  # pragma: no cover - compiled
+    """(B,) :func:`snap_to_peak` of the indices k (B,) on the rows of ``curve`` (B, n)."""
+    out = np.empty(k.shape[0], dtype=np.int64)
+    for b in range(k.shape[0]):
+        out[b] = _nearest_peak(curve[b], k[b], width)
+    return out
+
+
+@numba.njit(cache=True)
+def _swap_near(values, k, near_top, saved):  # pragma: no cover - compiled
+    """In place: the values (B, Nc) at the lags k − ``near_top`` … k + ``near_top`` (clipped
+    to the row) of each row, k (B,), exchanged with the first of ``saved`` (B, 2·near_top
+    + 1); a second call undoes the first."""
+    n = values.shape[1]
+    for b in range(values.shape[0]):
+        lo, hi = max(k[b] - near_top, 0), min(k[b] + near_top, n - 1)
+        for i in range(lo, hi + 1):
+            values[b, i], saved[b, i - lo] = saved[b, i - lo], values[b, i]
+
+
+@numba.njit(cache=True)
+def _near_run(row, k, floor, near_top):  # pragma: no cover - compiled
+    """Over the 2·``near_top`` + 1 lags j of k − near_top … k + near_top (each clipped to
+    the row (n,)): (the number of lags whose value is at least ``floor`` (float64), the
+    first and the last such j); (0, 0, 2·near_top) when there is none."""
+    n, count, first, last = row.shape[0], 0, -1, 2 * near_top
+    for j in range(2 * near_top + 1):
+        if row[min(max(k - near_top + j, 0), n - 1)] >= floor:
+            count += 1
+            first = j if first < 0 else first
+            last = j
+    return count, max(first, 0), last if first >= 0 else 2 * near_top
+
+
+@numba.njit(cache=True)
+def _flat_top(row, start, stop, m):  # pragma: no cover - compiled
+    """Whether a pair of samples (p, p + 1) of the raw row (n,), p = start … stop (samples
+    clipped to the row), is level to within the margin m, the sample before it rises into
+    it and the one after it falls from it (each to within m): a top a snap may take."""
+    n = row.shape[0]
+    for p in range(start, stop + 1):
+        v0 = np.float64(row[min(max(p - 1, 0), n - 1)])
+        v1 = np.float64(row[min(max(p, 0), n - 1)])
+        v2 = np.float64(row[min(max(p + 1, 0), n - 1)])
+        v3 = np.float64(row[min(max(p + 2, 0), n - 1)])
+        if abs(v2 - v1) <= m and v1 - v0 >= -m and v3 - v2 <= m:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _runner_up_rows(values, k, far, curve, lowpassed, raw, width, near_top):  # pragma: no cover
+    """(B,) bool :meth:`_Margins.runner_up` for the argmax k (B,) of the low-passed rows
+    ``values`` (B, Nc), ``far`` (B,) their largest values beyond ``near_top`` lags of k,
+    the raw rows ``curve`` (B, Nc) and the margins ``lowpassed`` and ``raw`` (B,) (float64).
+    The near run is the lags within ``lowpassed`` of the top (:func:`_near_run`). A row is
+    unsure when ``far`` reaches the run, when the run has a gap or touches the end of the
+    search, when its ends snap (``width``) to different raw peaks, or when the raw curve
+    has a flat top (:func:`_flat_top`) from the run's first lag − ``width`` − 1 to its last
+    + ``width`` + 1 (the batch's widest run, S = max(last − first): to first + S +
+    ``width``, as the vectorized form searched)."""
+    B, n = values.shape
+    first, last = np.empty(B, dtype=np.int64), np.empty(B, dtype=np.int64)
+    unsure = np.zeros(B, dtype=np.bool_)
+    for b in range(B):
+        row, kb = values[b], k[b]
+        floor = np.float64(row[kb]) - lowpassed[b]
+        count, f, l = _near_run(row, kb, floor, near_top)
+        unsure[b] = far[b] >= floor or count != l - f + 1 or f == 0 or l == 2 * near_top
+        first[b] = min(max(kb - near_top + f, 0), n - 1)
+        last[b] = min(max(kb - near_top + l, 0), n - 1)
+        if not unsure[b]:
+            a = curve[b]
+            unsure[b] = _nearest_peak(a, first[b], width) != _nearest_peak(a, last[b], width)
+    span = np.max(last - first) if B else 0
+    for b in range(B):
+        if not unsure[b]:
+            stop = min(last[b] + width + 1, first[b] + span + width)
+            unsure[b] = _flat_top(curve[b], first[b] - width - 1, stop, raw[b])
+    return unsure
 
 
 FORMS = ("matrix", "fft")

@@ -215,15 +215,37 @@ def _whole_windows(u0, amp, whole, dist, air, chirp: Chirp, receiver) -> np.ndar
     er = np.empty((n_win, width, Q), dtype=complex)  # e^{iβr}, r = 0…Q−1
     er[..., 0] = 1.0
     er[..., 1:] = np.exp(step)[..., None]
-    np.cumprod(er, axis=-1, out=er)
+    _cumprod(er)
     eq = np.empty((n_win, width, nq), dtype=complex)  # A e^{iα} e^{iβQq}, q = 0…nq−1
     eq[..., 0] = weights
     eq[..., 1:] = np.exp(Q * step)[..., None]
-    np.cumprod(eq, axis=-1, out=eq)
+    _cumprod(eq)
     z = np.matmul(eq.transpose(0, 2, 1), er).reshape(n_win, nq * Q)[:, :N]
     n = np.arange(N)
     quad = np.exp(1j * (np.pi * k / fs**2) * (n * n))
     return quad.real * z.imag + quad.imag * z.real
+
+
+def _cumprod(z: np.ndarray) -> None:
+    """In place: z (W, I, K) complex replaced by its cumulative products along the last
+    axis, bit for bit ``np.cumprod(z, axis=-1)``: compiled for K ≥ 3 (numpy's accumulate
+    over a short last axis goes row by row, slowly, with the plain complex product the
+    compiled loop uses), numpy's own for K ≤ 2 (one product a row, which numpy takes
+    through its vectorized loop, rounded otherwise)."""
+    if z.shape[-1] >= 3:
+        _cumprod_rows(z)
+    else:
+        np.cumprod(z, axis=-1, out=z)
+
+
+@numba.njit(cache=True)
+def _cumprod_rows(z):  # pragma: no cover - compiled
+    """In place: z[w, i, k] = z[w, i, k − 1] · z[w, i, k] for k = 1 … K − 1, z (W, I, K)."""
+    W, I, K = z.shape
+    for w in range(W):
+        for i in range(I):
+            for k in range(1, K):
+                z[w, i, k] = z[w, i, k - 1] * z[w, i, k]
 
 
 def _air_envelope(air, d: np.ndarray, u0: np.ndarray, chirp: Chirp, receiver, n_mid=None):

@@ -9,7 +9,15 @@ from simulation.evaluation import RangingScene
 from simulation.multipath import compute_paths
 from simulation.noise import noise_sigma
 from simulation.received import received_windows
-from simulation.receiver import dsp_for, reference_chain, snap_to_peak
+from simulation.receiver import (
+    NEAR_TOP,
+    SINGLE_MARGIN_LOWPASSED,
+    _Margins,
+    _snap_rows,
+    dsp_for,
+    reference_chain,
+    snap_to_peak,
+)
 from simulation.synthesis import synthesize, synthesize_direct
 
 ALL = ("floor", "ceiling", "south", "north", "west", "east")
@@ -278,6 +286,82 @@ def test_snap_to_peak_nearest_and_ties():
     assert snap_to_peak(x, np.array([0, 8])).tolist() == [1, 7]
     flat = np.zeros((1, 9))
     assert snap_to_peak(flat, np.array([5])).tolist() == [5]  # no peak: unchanged
+
+
+def _runner_up_vectorized(margin, values, k, curve, width, near_top=NEAR_TOP):
+    """The single-precision margins' runner-up test as numpy array operations (the form
+    :func:`simulation.receiver._runner_up_rows` compiles), with its batch-wide search span."""
+    rows, n = np.arange(len(k))[:, None], values.shape[1]
+    local = np.clip(k[:, None] + np.arange(-near_top, near_top + 1), 0, n - 1)
+    near_values = values[rows, local]
+    masked = values.copy()
+    masked[rows, local] = -np.inf
+    floor = (values[rows[:, 0], k].astype(float) - margin.lowpassed)[:, None]
+    near = near_values >= floor
+    first = np.argmax(near, axis=1)
+    last = near.shape[1] - 1 - np.argmax(near[:, ::-1], axis=1)
+    unsure = (masked.max(axis=1) >= floor[:, 0]) | (near.sum(axis=1) != last - first + 1)
+    unsure |= (first == 0) | (last == near.shape[1] - 1)
+    first, last = local[rows[:, 0], first], local[rows[:, 0], last]
+    unsure |= snap_to_peak(curve, first, width) != snap_to_peak(curve, last, width)
+    span = int(np.max(last - first)) if len(first) else 0
+    idx = first[:, None] + np.arange(-width - 2, span + width + 3)
+    inside = idx[:, 1:-2] <= (last + width + 1)[:, None]
+    v = curve[rows, np.clip(idx, 0, n - 1)].astype(float)
+    m, d = margin.curve[:, None], np.diff(v, axis=1)
+    flat_top = (np.abs(d[:, 1:-1]) <= m) & (d[:, :-2] >= -m) & (d[:, 2:] <= m)
+    return unsure | np.any(flat_top & inside, axis=1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_margins_equal_their_vectorized_form(seed):
+    """The compiled runner-up test and snap decide as their numpy form, bit for bit: on
+    smooth tops, quantized curves (level pairs and ties), −inf runs (the first-path pick's),
+    NaN, either precision, strided rows, and indices at the ends."""
+    rng = np.random.default_rng(seed)
+    for _ in range(150):
+        B, n = int(rng.integers(1, 24)), int(rng.integers(3, 400))
+        dt = rng.choice([np.float32, np.float64])
+        x = np.arange(n)[None]
+        lp = np.exp(-(((x - rng.uniform(0, n, (B, 1))) / rng.uniform(1, 400, (B, 1))) ** 2))
+        lp = np.round(lp / 10.0 ** rng.integers(-7, -1)) * 10.0 ** rng.integers(-7, -1)
+        curve = np.abs(np.sin(np.pi * x / rng.uniform(2.2, 4, (B, 1)))) * (lp + 0.1)
+        q = 10.0 ** rng.integers(-7, -2)
+        lp, curve = lp.astype(dt), (np.round(curve / q) * q).astype(dt)
+        if rng.random() < 0.2:
+            lp[:, : int(rng.integers(0, n))] = -np.inf
+        if rng.random() < 0.2:
+            lp[rng.integers(0, B), rng.integers(0, n)] = np.nan
+            curve[rng.integers(0, B), rng.integers(0, n)] = np.nan
+        if rng.random() < 0.5:  # rows of a wider buffer, as the DSP's
+            lp = np.pad(lp, ((0, 0), (0, 5)))[:, :n]
+            curve = np.pad(curve, ((0, 0), (0, 7)))[:, :n]
+        k = np.argmax(lp, axis=1) if rng.random() < 0.8 else rng.integers(0, n, B)
+        width = int(rng.integers(1, 40))
+        with np.errstate(invalid="ignore"):
+            margin = _Margins(lp[np.arange(B), k], curve)
+            want = _runner_up_vectorized(margin, lp, k, curve, width)
+            before = lp.copy()
+            assert np.array_equal(margin.runner_up(lp, k, curve, width), want)
+        assert np.array_equal(lp, before, equal_nan=True)  # values put back
+        assert np.array_equal(_snap_rows(curve, k, width), snap_to_peak(curve, k, width))
+
+
+def test_compiled_margins_edge_cases():
+    """A near run that reaches the end of the search, and a far lag exactly at the floor,
+    are too close to call (each the only reason in its row)."""
+    n, k = 400, 100
+    lags = np.arange(n)
+    plateau = np.where((lags >= k) & (lags <= k + NEAR_TOP), 1.0, 0.0)  # to the search's end
+    far = np.where(lags == k, 1.0, 0.0)
+    far[300] = 1.0 - SINGLE_MARGIN_LOWPASSED * 1.0  # exactly the floor
+    lp = np.stack([plateau, far])
+    top = np.array([k + NEAR_TOP // 2, k])  # one raw peak each, within the snap's reach
+    curve = 200.0 - np.abs(lags[None] - top[:, None])
+    margin = _Margins(lp[:, k], curve)
+    want = _runner_up_vectorized(margin, lp, np.array([k, k]), curve, 40)
+    assert want.tolist() == [True, True]
+    assert margin.runner_up(lp, np.array([k, k]), curve, 40).tolist() == [True, True]
 
 
 def test_receiver_validation():
