@@ -9,13 +9,12 @@ geometry tells them apart. A range the fix rests on is a direct path only if the
 segment from the fix to that anchor is free (:func:`simulation.polyhedral.line_of_sight`);
 a fix rests on a hidden anchor, or lies inside an obstacle, only if it is wrong.
 
-So, for each fix that rests on a hidden anchor or lies outside the room:
-
-1. the hidden anchors' ranges are dropped (they are echoes where the fix stands, or the fix
-   is wrong) and the remaining ranges are solved again by the same positioning;
-2. the new fix replaces the old one if it is verified and rests on anchors it sees, inside
-   the room;
-3. otherwise the old fix stays, unverified: the system cannot vouch for it.
+So a fix that rests on a hidden anchor, or lies outside the room, is not verified: it stays
+where the residual test put it, unverified. The check changes what the system vouches for,
+not where it puts the tag. (Solving such a fix again without the hidden ranges was tried:
+it helps a fix now and then, but it changes the positions the planner scores, and in the
+L-shaped lab it led the default plan to a worse layout; BENCHMARKS.md, "Rooms with
+obstacles".)
 
 The check needs the room's map: the positioning must know its room (``keep_in_room``) and
 the room must have something that blocks a path (obstacles, or a floor plan that is not
@@ -24,12 +23,10 @@ convex).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from simulation.polyhedral import line_of_sight
-from simulation.robust import UNVERIFIED, VERIFIED
+from simulation.robust import UNVERIFIED
 
 
 def needs_check(room) -> bool:
@@ -55,22 +52,16 @@ def contradictions(room, layouts, owner, x, used) -> tuple[np.ndarray, np.ndarra
     return hidden, outside
 
 
-def map_check(room, layouts, owner, ranges, fix: dict, solve: Callable) -> dict:
+def map_check(room, layouts, owner, fix: dict) -> dict:
     """The fixes of ``fix`` (a dict of flat arrays: ``x`` (N, 3), ``used`` (N, M),
     ``quality`` (N,) and any other per-fix arrays) checked against the room (module
-    docstring); ``ranges`` (N, M) m the fixes were solved from, ``layouts`` (L, M, 3) and
-    ``owner`` (N,) as in :func:`contradictions`; ``solve(anchors (n, M, 3), ranges (n, M))``
-    solves rows again and returns the same dict for them. Returns the checked dict."""
+    docstring), ``layouts`` (L, M, 3) and ``owner`` (N,) as in :func:`contradictions`: the
+    same dict with ``quality`` no better than unverified where a fix rests on a hidden anchor
+    or lies outside the room."""
     hidden, outside = contradictions(room, layouts, owner, fix["x"], fix["used"])
-    bad = np.flatnonzero(hidden.any(axis=1) | outside)
-    if not len(bad):
+    bad = hidden.any(axis=1) | outside
+    if not bad.any():
         return fix
-    out = {k: v.copy() for k, v in fix.items()}
-    again = solve(layouts[owner[bad]], np.where(hidden[bad], np.nan, ranges[bad]))
-    h2, out2 = contradictions(room, layouts, owner[bad], again["x"], again["used"])
-    good = (again["quality"] == VERIFIED) & ~h2.any(axis=1) & ~out2
-    for k in out:
-        out[k][bad[good]] = again[k][good]
-    q = out["quality"]
-    q[bad[~good]] = np.minimum(q[bad[~good]], UNVERIFIED)
-    return out
+    quality = fix["quality"].copy()
+    quality[bad] = np.minimum(quality[bad], UNVERIFIED)
+    return {**fix, "quality": quality}

@@ -97,19 +97,17 @@ class Positioning:
         """Positions (..., P, 3) m (or a :class:`simulation.PositionFix`) from ranges
         (..., P, M) m of the anchors (M, 3) or layouts (L, M, 3), as this positioning
         solves them in ``room`` (started inside its box; kept in its box and floor plan
-        with ``keep_in_room``)."""
+        with ``keep_in_room``). Robust fixes kept in a room whose map can block a path are
+        verified only if they see the anchors they rest on (:mod:`simulation.map_check`)."""
         region = (np.zeros(3), np.asarray(room.size, dtype=float))
         poly = None if (room.is_shoebox or not self.keep_in_room) else room.floor_corners
-
-        def solve(a, rho, full: bool = full_output):
-            return locate(a, rho, method=self.method, region=region, bounded=self.keep_in_room,
-                          floor_plan=poly, max_iter=self.max_iter, range_sigma=self.range_sigma,
-                          false_alarm=self.false_alarm, full_output=full)  # fmt: skip
-
-        if not (self.method == "robust" and self.keep_in_room and needs_check(room)):
-            return solve(anchors, ranges)
-        fix = _map_checked(room, anchors, ranges, solve(anchors, ranges, True), solve)
-        return fix if full_output else fix.x
+        fix = locate(anchors, ranges, method=self.method, region=region,
+                     bounded=self.keep_in_room, floor_plan=poly, max_iter=self.max_iter,
+                     range_sigma=self.range_sigma, false_alarm=self.false_alarm,
+                     full_output=full_output)  # fmt: skip
+        if full_output and self.method == "robust" and self.keep_in_room and needs_check(room):
+            return _map_checked(room, anchors, fix)  # what it vouches for, on the room's map
+        return fix
 
     def describe(self) -> str:
         """One line: the method and whether positions are kept in the room."""
@@ -120,24 +118,17 @@ class Positioning:
                 f"{kept}")  # fmt: skip
 
 
-def _map_checked(room, anchors, ranges, fix: PositionFix, solve) -> PositionFix:
-    """``fix`` (of ``solve(anchors, ranges)``) checked against the room's map
-    (:func:`simulation.map_check.map_check`), on flat rows and shaped back."""
+def _map_checked(room, anchors, fix: PositionFix) -> PositionFix:
+    """``fix`` checked against the room's map (:func:`simulation.map_check.map_check`), on
+    flat rows and shaped back: its quality, the positions as they were."""
     a = np.asarray(anchors, dtype=float)
     layouts = a.reshape(-1, a.shape[-2], 3)
-    lead, M = fix.quality.shape, a.shape[-2]
-    flat = {k: np.asarray(v).reshape(-1, *np.shape(v)[len(lead):]) for k, v in
-            dataclasses.asdict(fix).items()}  # fmt: skip
+    lead = fix.quality.shape
+    flat = {"x": fix.x.reshape(-1, 3), "used": fix.used.reshape(-1, a.shape[-2]),
+            "quality": fix.quality.reshape(-1)}  # fmt: skip
     owner = np.repeat(np.arange(len(layouts)), len(flat["x"]) // len(layouts))
-
-    def again(sub_anchors, sub_ranges):
-        f = solve(sub_anchors, sub_ranges[:, None, :], True)
-        return {k: np.asarray(v).reshape(len(sub_ranges), *np.shape(v)[2:]) for k, v in
-                dataclasses.asdict(f).items()}  # fmt: skip
-
-    rho = np.asarray(ranges, dtype=float).reshape(-1, M)
-    out = map_check(room, layouts, owner, rho, flat, again)
-    return PositionFix(**{k: v.reshape(*lead, *v.shape[1:]) for k, v in out.items()})
+    quality = map_check(room, layouts, owner, flat)["quality"]
+    return dataclasses.replace(fix, quality=quality.reshape(lead))
 
 
 @dataclass(frozen=True)

@@ -231,41 +231,27 @@ def test_a_consistent_set_the_fix_cannot_see_is_not_verified():
     assert not fix.verified.any() and fix.quality[0] == UNVERIFIED
 
 
-def test_echoes_that_agree_on_a_hidden_point_are_dropped_and_the_true_fix_found():
+def test_the_map_check_vouches_only_for_fixes_that_see_their_anchors():
     from simulation.map_check import map_check
 
-    tag, fake = np.array([3.0, 6.0, 1.2]), np.array([2.0, 3.0, 1.2])
+    tag, fake = np.array([3.0, 6.0, 1.2]), np.array([1.0, 4.0, 1.2])
     anchors = np.concatenate([WEST, EAST])
-    # five direct ranges agree on the tag; six "echoes" agree on the fake point, and the
-    # fix handed to the check rests on them (verified by the residual test)
-    ranges = np.concatenate(
-        [np.linalg.norm(WEST - tag, axis=1), np.linalg.norm(EAST - fake, axis=1)]
-    )[None]
+    used = np.array([[True] * 5 + [False] * 6, [False] * 5 + [True] * 6])
     fix = {
-        "x": fake[None],
-        "used": np.array([[False] * 5 + [True] * 6]),
-        "quality": np.array([VERIFIED], dtype=np.int8),
-        "cost": np.zeros(1),
+        "x": np.stack([tag, fake]),
+        "used": used,
+        "cost": np.zeros(2),
+        "quality": np.array([VERIFIED, VERIFIED], dtype=np.int8),
     }
-
-    def solve(a, rho):
-        f = MAPPED.locate(RACK_ROOM, a[0], rho, full_output=True)
-        return {"x": f.x, "used": f.used, "quality": f.quality, "cost": f.cost}
-
-    out = map_check(RACK_ROOM, anchors[None], np.zeros(1, int), ranges, fix, solve)
-    np.testing.assert_allclose(out["x"][0], tag, atol=1e-6)
-    assert out["quality"][0] == VERIFIED and out["used"][0].tolist() == [True] * 5 + [False] * 6
-    assert fix["x"][0].tolist() == fake.tolist()  # the input is not changed
-    # with fewer than 5 anchors left the old fix stays, unverified
-    out = map_check(
-        RACK_ROOM,
-        anchors[None, 1:],
-        np.zeros(1, int),
-        ranges[:, 1:],
-        {k: v[:, 1:] if k == "used" else v for k, v in fix.items()},
-        solve,
-    )
-    assert out["quality"][0] == UNVERIFIED and out["x"][0].tolist() == fake.tolist()
+    out = map_check(RACK_ROOM, anchors[None], np.zeros(2, int), fix)
+    # the tag sees the west anchors it rests on; the fake point sees none of the east ones
+    assert out["quality"].tolist() == [VERIFIED, UNVERIFIED]
+    assert out["x"] is fix["x"] and fix["quality"].tolist() == [VERIFIED, VERIFIED]
+    # inside the rack: not in the room, so not verified whatever it rests on
+    inside = {**fix, "x": np.array([[4.25, 5.0, 1.0], tag])}
+    inside["used"] = np.array([used[0], used[0]])
+    out = map_check(RACK_ROOM, anchors[None], np.zeros(2, int), inside)
+    assert out["quality"].tolist() == [UNVERIFIED, VERIFIED]
 
 
 def test_the_map_check_keeps_the_rows_of_many_layouts_apart():
