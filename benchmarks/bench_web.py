@@ -19,16 +19,14 @@ import json
 import shutil
 import statistics
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 import _common  # noqa: F401  (the checkout's packages)
 import httpx
 import numpy as np
-import uvicorn
 
-from placement.web.app import create_app
+from placement.web.app import CHROMIUM_FLAGS, serve_in_thread
 from placement.web.workspace import Workspace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,22 +35,6 @@ ROOMS = {
     "l-shaped-lab": ROOT / "examples" / "l-shaped-lab.toml",
     "warehouse-aisles": ROOT / "examples" / "warehouse-aisles.toml",
 }
-FLAGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--no-first-run",
-    "--disable-component-update",
-    "--disable-sync",
-]
-
-
-def _serve(ws):
-    server = uvicorn.Server(uvicorn.Config(create_app(ws), port=0, log_level="warning"))
-    threading.Thread(target=server.run, daemon=True).start()
-    while not server.started:
-        time.sleep(0.05)
-    return server, f"http://127.0.0.1:{server.servers[0].sockets[0].getsockname()[1]}"
 
 
 def _targets(room, n: int, rng) -> list[list[float]]:
@@ -88,7 +70,7 @@ def _page_ms(url: str, targets, chromium: str) -> list[float]:
         await act("POST", "/api/anchors/move", { index: 0, point: p });
         return performance.now() - t0; }"""
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=chromium, args=FLAGS)
+        browser = pw.chromium.launch(executable_path=chromium, args=list(CHROMIUM_FLAGS))
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
         page.goto(url)
         page.wait_for_selector("#covered-k")
@@ -113,7 +95,7 @@ def main() -> None:
     for name, path in ROOMS.items():
         for system in ("paper", "recommended"):
             ws = Workspace(Path(tempfile.mkdtemp()), path, system=system)
-            server, url = _serve(ws)
+            server, url = serve_in_thread(ws)
             targets = _targets(ws.room, args.moves, np.random.default_rng(0))
             row = {
                 "bench": "web_drag",

@@ -9,25 +9,14 @@ from __future__ import annotations
 
 import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
 
-import uvicorn
 from playwright.sync_api import sync_playwright
 
-from placement.web.app import create_app
+from placement.web.app import CHROMIUM_FLAGS, serve_in_thread
 from placement.web.workspace import Workspace
 
 ROOT = Path(__file__).resolve().parent.parent
-FLAGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--no-first-run",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 def main(out: str) -> None:
@@ -37,15 +26,11 @@ def main(out: str) -> None:
         ROOT / "docs" / "examples" / "l-shaped-lab-recommended",
         system="recommended",
     )
-    server = uvicorn.Server(uvicorn.Config(create_app(ws), port=0, log_level="warning"))
-    threading.Thread(target=server.run, daemon=True).start()
-    while not server.started:
-        time.sleep(0.05)
-    port = server.servers[0].sockets[0].getsockname()[1]
+    server, url = serve_in_thread(ws)
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=FLAGS)
+        browser = p.chromium.launch(executable_path="/usr/bin/chromium", args=list(CHROMIUM_FLAGS))
         page = browser.new_page(viewport={"width": 1400, "height": 980})
-        page.goto(f"http://127.0.0.1:{port}/")
+        page.goto(url + "/")
         page.wait_for_selector("#covered-k")
         page.click("#field-run")
         page.wait_for_selector("#field-stats", timeout=300_000)

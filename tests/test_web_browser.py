@@ -9,8 +9,6 @@ none it is skipped, saying so. CI installs one (``.ci/run``)."""
 from __future__ import annotations
 
 import shutil
-import threading
-import time
 from pathlib import Path
 
 import pytest
@@ -24,16 +22,6 @@ CHROMIUM = next(
     ),
     None,
 )
-#: what Chromium needs in a sandboxed, offline machine (no GPU, no calls home)
-FLAGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 pytestmark = [
     pytest.mark.slow,
@@ -47,35 +35,25 @@ pytestmark = [
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    import uvicorn
-
-    from placement.web.app import create_app
+    from placement.web.app import serve_in_thread
     from placement.web.workspace import Workspace
 
     ws = Workspace(tmp_path_factory.mktemp("work"), EXAMPLES / "l-shaped-lab.toml")
-    srv = uvicorn.Server(
-        uvicorn.Config(create_app(ws), host="127.0.0.1", port=0, log_level="warning")
-    )
-    thread = threading.Thread(target=srv.run, daemon=True)
-    thread.start()
-    for _ in range(200):
-        if srv.started:
-            break
-        time.sleep(0.05)
-    port = srv.servers[0].sockets[0].getsockname()[1]
-    yield f"http://127.0.0.1:{port}/", ws
+    srv, url = serve_in_thread(ws)
+    yield url + "/", ws
     if ws.plan is not None:
         ws.plan.cancel()
     srv.should_exit = True
-    thread.join(10)
 
 
 @pytest.fixture(scope="module")
 def page(server):
     from playwright.sync_api import sync_playwright
 
+    from placement.web.app import CHROMIUM_FLAGS
+
     with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=list(CHROMIUM_FLAGS))
         pg = browser.new_page(viewport={"width": 1400, "height": 1000}, accept_downloads=True)
         errors = []
         pg.on("pageerror", lambda e: errors.append(str(e)))

@@ -172,3 +172,29 @@ def create_app(ws: Workspace) -> FastAPI:
     _job_routes(app, ws)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
     return app
+
+
+#: what a headless Chromium needs to show the page on a sandboxed machine without network
+#: (no GPU, no calls home): the flags of the browser test, the benchmark and the screenshot
+CHROMIUM_FLAGS = ("--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync")  # fmt: skip
+
+
+def serve_in_thread(ws: Workspace, host: str = "127.0.0.1", port: int = 0, timeout: float = 30.0):
+    """Serve the page over ``ws`` from a daemon thread (uvicorn; ``port`` 0: a free one);
+    (the server, its address "http://host:port"). ``server.should_exit = True`` stops it."""
+    import threading
+    import time
+
+    import uvicorn
+
+    server = uvicorn.Server(uvicorn.Config(create_app(ws), host=host, port=port,
+                                           log_level="warning"))  # fmt: skip
+    threading.Thread(target=server.run, daemon=True).start()
+    deadline = time.monotonic() + timeout
+    while not server.started:
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"the page's server did not start within {timeout:g} s")
+        time.sleep(0.05)
+    return server, f"http://{host}:{server.servers[0].sockets[0].getsockname()[1]}"
