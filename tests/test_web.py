@@ -236,6 +236,22 @@ def test_a_plan_runs_in_the_background_and_can_be_cancelled(lab):
     s = client.post("/api/plan/cancel").json()
     assert s["plan"]["state"] == "cancelled" and not ws.plan.running
     assert System.paper().name in s["system"]["name"]
+    assert cli_error(["serve", "--plans", "0"]).startswith("--plans")
+
+
+def test_two_plans_at_once_when_the_user_asks(tmp_path):
+    ws = Workspace(tmp_path / "work", None, workers=1, max_plans=2)
+    with TestClient(create_app(ws)) as client:
+        try:
+            for _ in range(2):
+                assert client.post("/api/plan", json={"anchors": 4}).status_code == 200
+            r = client.post("/api/plan", json={"anchors": 4})
+            assert r.status_code == 400 and "2 plans are running (--plans 2)" in r.json()["error"]
+            assert len(ws.plans) == 2 and ws.plan is ws.plans[-1]
+        finally:
+            for plan in ws.plans:
+                plan.cancel()
+        assert not any(p.running for p in ws.plans)
 
 
 @pytest.mark.slow

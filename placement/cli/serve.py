@@ -10,6 +10,8 @@ from simulation import checks
 
 #: the address the page is served on unless --host says otherwise: this machine only
 LOCALHOST = "127.0.0.1"
+#: the most plans a server runs at once
+MAX_PLANS = 16
 
 
 def register(sub) -> None:
@@ -45,6 +47,8 @@ def register(sub) -> None:
         default=0,
         help="worker processes of a plan (0: one per available core)",
     )
+    p.add_argument("--plans", type=int, default=1, help="plans that may run at once (1; the "
+                   "page shows the latest, the others write to --work)")  # fmt: skip
     p.set_defaults(func=run)
 
 
@@ -57,6 +61,7 @@ def run(args) -> int:
 
     checks.count("--port", args.port, low=0, high=65535)
     checks.count("--workers", args.workers, low=0, high=available_cores() * 64)
+    checks.count("--plans", args.plans, low=1, high=MAX_PLANS)
     if args.result is not None:
         checks.input_dir("--result", args.result)
     if args.room is not None:
@@ -71,7 +76,9 @@ def run(args) -> int:
         "dxf_unit": args.dxf_unit,
         "dxf_layer": args.dxf_layer,
     }
-    ws = Workspace(work, args.room, args.result, options, args.system, args.workers)
+    ws = Workspace(
+        work, args.room, args.result, options, args.system, args.workers, max_plans=args.plans
+    )
     config = uvicorn.Config(create_app(ws), host=args.host, port=args.port, log_level="warning")
     server = uvicorn.Server(config)
     print(f"planning page for {ws.room.name}: work folder {work}", flush=True)
@@ -79,8 +86,8 @@ def run(args) -> int:
         print(f"listening on {args.host}: other machines can reach this page", flush=True)
     _announce(server, args.host)
     server.run()
-    if ws.plan is not None:
-        ws.plan.cancel()
+    for plan in ws.plans:
+        plan.cancel()
     return 0
 
 

@@ -75,7 +75,8 @@ class Workspace:
     """The state behind one page server (module docstring). ``folders``: the folders the
     page may read room files from; ``work``: the folder it writes to; ``room_file`` and
     ``result_dir`` what ``anchorplan serve`` was given; ``workers`` a plan's worker
-    processes (0: one per core); ``field_draws`` the draws of the field simulation."""
+    processes (0: one per core); ``field_draws`` the draws of the field simulation;
+    ``max_plans`` the plans that may run at once (the page shows the latest)."""
 
     def __init__(
         self,
@@ -86,6 +87,7 @@ class Workspace:
         system: str | None = None,
         workers: int = 0,
         field_draws: int = FIELD_DRAWS,
+        max_plans: int = 1,
     ):
         self.work = Path(work).resolve()
         self.work.mkdir(parents=True, exist_ok=True)
@@ -93,7 +95,9 @@ class Workspace:
         self.folders[0].mkdir(exist_ok=True)
         self.workers, self.field_draws = workers, field_draws
         self.lock = threading.RLock()
-        self.plan: jobs.PlanJob | None = None
+        self.plan: jobs.PlanJob | None = None  # the latest: the one the page shows
+        self.plans: list[jobs.PlanJob] = []
+        self.max_plans = max_plans
         self.field: jobs.FieldJob | None = None
         self.plan_count = 0
         self.result_dir = None if result_dir is None else Path(result_dir).resolve()
@@ -245,13 +249,17 @@ class Workspace:
         """Check the plan's settings as ``anchorplan plan`` does, then run it in the
         background (one plan at a time)."""
         with self.lock:
-            if self.plan is not None and self.plan.running:
-                raise ValueError("plan: a plan is running; cancel it or wait for it to end")
+            running = sum(p.running for p in self.plans)
+            if running >= self.max_plans:
+                what = "a plan is" if self.max_plans == 1 else f"{running} plans are"
+                raise ValueError(f"plan: {what} running (--plans {self.max_plans}); cancel it "
+                                 "or wait for it to end")  # fmt: skip
             folder = self.work / "plans" / f"plan-{self.plan_count + 1}"
             argv = self.plan_argv(settings, folder / "out")
             check_plan(argv)
             self.plan_count += 1
             self.plan = jobs.PlanJob(folder, argv, settings)
+            self.plans.append(self.plan)
 
     def open_result(self, folder: Path) -> None:
         """Show the layout of a result folder (``layout.json``, else result.json's)."""
