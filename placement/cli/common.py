@@ -257,12 +257,17 @@ def load_layout(path: str, room: Room, min_anchors: int = 4) -> np.ndarray:
     if not isinstance(data, dict) or "anchors" not in data:
         raise ValueError(f'--layout {path}: expected an object {{"anchors": [[x, y, z], ...]}}')
     try:
-        anchors = checks.points("anchors", data["anchors"])
-        anchors = room.check_anchors(anchors, min_anchors=min_anchors)
-        checks.distinct("anchors", anchors)
+        return checked_layout(room, data["anchors"], min_anchors)
     except ValueError as exc:
         raise ValueError(f"--layout {path}: {exc}") from None
-    return anchors
+
+
+def checked_layout(room: Room, anchors, min_anchors: int = 4) -> np.ndarray:
+    """(M, 3) ``anchors`` checked as a layout file's: points, at least ``min_anchors``, in
+    the room and out of its keep-outs (:meth:`simulation.Room.check_anchors`), distinct."""
+    a = room.check_anchors(checks.points("anchors", anchors), min_anchors=min_anchors)
+    checks.distinct("anchors", a)
+    return a
 
 
 def output_dir(name: str, path) -> Path:

@@ -17,6 +17,7 @@ import numpy as np
 
 from analysis.coverage import bound, coverage
 from analysis.fim import DEFAULT_SIGMA
+from placement.cli.common import checked_layout
 from placement.coverage import coverage_k
 from placement.surfaces import MAX_ANCHORS, project, rectangle_corners
 from simulation import checks
@@ -92,6 +93,7 @@ def maps(room: Room, system, anchors, sigma: float = DEFAULT_SIGMA) -> dict[str,
     k and by 4 anchors, and the PEB's median and P95 (m) where finite."""
     a = np.asarray(anchors, dtype=float)
     cells, size = slice_cells(room)
+    height = slice_height(room) if not len(cells) else float(cells[0, 2])
     nodes = room.grid()
     k = coverage_k(system)
     heard_cells = coverage(room, a, cells, system=system)
@@ -101,7 +103,7 @@ def maps(room: Room, system, anchors, sigma: float = DEFAULT_SIGMA) -> dict[str,
     return {
         "cells": np.round(cells[:, :2], 6).tolist(),
         "cell": size,
-        "height": slice_height(room),
+        "height": height,
         "heard": heard_cells.astype(int).tolist(),
         "peb": [float(v) if np.isfinite(v) else None for v in peb_cells],
         "k": k,
@@ -122,9 +124,7 @@ def check_layout(room: Room, anchors, min_anchors: int = 4) -> np.ndarray:
     a = checks.points("anchors", anchors)
     if len(a) > MAX_ANCHORS:
         raise ValueError(f"anchors: at most {MAX_ANCHORS} anchors, got {len(a)}")
-    a = room.check_anchors(a, min_anchors=min_anchors)
-    checks.distinct("anchors", a)
-    return a
+    return checked_layout(room, a, min_anchors)
 
 
 def moved(room: Room, anchors, index: int, point) -> np.ndarray:

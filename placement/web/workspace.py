@@ -123,8 +123,7 @@ class Workspace:
             **options,
         }
         room = load_room(None if path is None else str(path), SimpleNamespace(**opts))
-        chosen = system_choice(system, None if path is None else str(path))
-        chosen.check_room(room)
+        chosen = _system(system, path, room)
         argv = [] if path is None else ["--room", str(path)]
         if path is not None and str(path).lower().endswith(".dxf"):
             argv += [
@@ -144,8 +143,7 @@ class Workspace:
             self.field = None
 
     def set_system(self, name: str | None) -> None:
-        chosen = system_choice(name, None if self.room_path is None else str(self.room_path))
-        chosen.check_room(self.room)
+        chosen = _system(name, self.room_path, self.room)
         with self.lock:
             self.system, self.system_name, self.field = chosen, name, None
 
@@ -274,8 +272,9 @@ class Workspace:
         plan's layout: the folder the report, the sheet and the DXF are made from."""
         with self.lock:
             anchors, plan = np.asarray(self.anchors), self.plan
-        if plan is not None and plan.status()["state"] == "done":
-            planned = np.asarray(plan.status()["result"]["anchors"], dtype=float)
+        status = None if plan is None else plan.status()
+        if status is not None and status["state"] == "done":
+            planned = np.asarray(status["result"]["anchors"], dtype=float)
             if planned.shape == anchors.shape and np.allclose(planned, anchors, atol=1e-9):
                 return plan.out
         key = hashlib.sha256(
@@ -313,6 +312,14 @@ class Workspace:
         else:
             run_cli(["export", str(folder), "--dxf", str(out / "plan.dxf")])
         return out / EXPORTS[kind]
+
+
+def _system(name: str | None, room_file, room):
+    """The system ``--system name`` chooses for ``room`` (its file's [system] table when
+    ``name`` is None), checked against the room."""
+    chosen = system_choice(name, None if room_file is None else str(room_file))
+    chosen.check_room(room)
+    return chosen
 
 
 def check_plan(argv: list[str]) -> None:
