@@ -1,6 +1,7 @@
 """Latency of the planning page's update after a drag: one anchor moved (the server snaps
 it, recomputes the coverage and PEB maps and answers with the page's state), in the
-techtile room, the L-shaped lab and the warehouse, with the paper's and the recommended
+example rooms (techtile, the L-shaped lab, the warehouse, the 24 m hall, the office and
+the ordinary room), with the paper's and the recommended
 system. Two figures per case, both milliseconds over ``--moves`` moves:
 
 - ``server``: the HTTP round trip of ``POST /api/anchors/move`` from a client beside the
@@ -8,7 +9,7 @@ system. Two figures per case, both milliseconds over ``--moves`` moves:
 - ``page``: in headless Chromium, from the page's request to the end of its redraw (what a
   user waits for after letting go of an anchor); skipped without a Chromium.
 
-    python benchmarks/bench_web.py [--moves 30]
+    python benchmarks/bench_web.py [--moves 30] [--rooms techtile hall ...]
 
 One JSON line per (room, system)."""
 
@@ -34,6 +35,9 @@ ROOMS = {
     "techtile": None,
     "l-shaped-lab": ROOT / "examples" / "l-shaped-lab.toml",
     "warehouse-aisles": ROOT / "examples" / "warehouse-aisles.toml",
+    "hall": ROOT / "examples" / "hall.toml",
+    "office": ROOT / "examples" / "office.toml",
+    "ordinary-room": ROOT / "examples" / "ordinary-room.toml",
 }
 
 
@@ -90,9 +94,11 @@ def _stats(ms: list[float]) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--moves", type=int, default=30)
+    ap.add_argument("--rooms", nargs="+", choices=list(ROOMS), default=list(ROOMS))
     args = ap.parse_args()
     chromium = shutil.which("chromium")
-    for name, path in ROOMS.items():
+    for name in args.rooms:
+        path = ROOMS[name]
         for system in ("paper", "recommended"):
             ws = Workspace(Path(tempfile.mkdtemp()), path, system=system)
             server, url = serve_in_thread(ws)

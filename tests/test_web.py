@@ -68,10 +68,11 @@ def test_the_maps_are_the_librarys_coverage_and_bound(lab):
     np.testing.assert_allclose(got, peb, rtol=1e-12)
     nodes = coverage(ws.room, a, ws.room.grid(), system=ws.system)
     assert m["summary"]["covered_k"] == pytest.approx(np.mean(nodes >= m["k"]))
-    assert m["k"] == 4 and len(cells) <= scene.MAX_CELLS
+    assert m["k"] == 4 and len(cells) <= scene.MAX_CELLS and not s["system"]["verifies"]
     # the recommended system rejects echoes: it needs 5 anchors in line of sight
     s = client.post("/api/system", json={"system": "recommended"}).json()
     assert s["maps"]["k"] == 5 and s["system"]["name"] == "recommended"
+    assert s["system"]["verifies"]  # the page shows the verified share only then
 
 
 def test_a_moved_anchor_snaps_to_its_surface_and_the_coverage_follows(lab):

@@ -194,6 +194,7 @@ class Workspace:
             "room_file": None if self.room_path is None else Path(self.room_path).name,
             "system": {
                 "name": system.name,
+                "verifies": system.positioning.method == "robust",
                 "chosen": self.system_name,
                 "describe": describe_system(room, system),
             },

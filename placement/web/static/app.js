@@ -292,7 +292,8 @@ function drawField(status) {
   else {
     const r = status.result;
     fieldResult = r;
-    box.innerHTML = `<span id="field-stats">median ${metres(r.median)}, mean ${metres(r.mean)}, P95 ${metres(r.p95)}</span>; verified ${pct(r.verified)}; a fix at ${pct(r.fixes)} <span class="muted">(${status.total} draws, anchors mounted within 3 cm, at the map's cells)</span>`;
+    const verified = state.system.verifies ? `; verified ${pct(r.verified)}` : "";
+    box.innerHTML = `<span id="field-stats">median ${metres(r.median)}, mean ${metres(r.mean)}, P95 ${metres(r.p95)}</span>${verified}; a fix at ${pct(r.fixes)} <span class="muted">(${status.total} draws, anchors mounted within 3 cm, at the map's cells)</span>`;
   }
 }
 
