@@ -17,16 +17,24 @@ schemes (Casas et al., 2006):
    (at most :data:`SUBSET_ITER` iterations); the one whose removal leaves the smaller T is
    dropped;
 4. when that ends without 5 consistent anchors (two or more echoes can pull the first fit
-   so far that the deleted residuals point at good anchors), search the subsets of the
-   heard anchors exhaustively, the largest first, each solved from the linear solution of
-   its own squared-range differences, down to 5 anchors; the first size with a subset that
-   passes the test gives the fix (the subset with the smallest T), within a budget of
-   :data:`SUBSET_BUDGET` solves per fix; a subset still above :data:`SCREEN_FACTOR` times
-   the threshold after :data:`SUBSET_SCREEN` iterations is not solved on;
+   so far that the deleted residuals point at good anchors), or with a dropped range
+   shorter than its anchor's distance from the fix (an echo makes a range longer, never
+   shorter: a direct range was dropped), search for consensus as RANSAC does (Fischler and
+   Bolles, 1981), deterministically: minimal sets of 4 heard anchors, those with the
+   shortest ranges first (a near anchor is more often in sight, and an echo only
+   lengthens a range), each solved from the linear solution of its squared-range
+   differences; a hypothesis is scored by its contradictions (ranges shorter than its
+   distance by more than :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`);
+   one better than the best so far is refined by least squares on its inliers, then on
+   those within 3σ of the refined fix; the first refined set of 5 or more that passes the
+   test with no contradiction ends the search (at most :data:`HYPOTHESES` minimal sets),
+   else the best one is kept;
 5. the fix is the least-squares position on the anchors kept.
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
-test, so that one echo among them would have shown; **unverified** (:data:`UNVERIFIED`)
+test, so that one echo among them would have shown, and their directions fix the position
+(dilution of precision at most :data:`DOP_MAX`: five collinear anchors agree with each
+other on a whole circle); **unverified** (:data:`UNVERIFIED`)
 when only 4 remain (no redundancy to tell an echo) or no subset passes; **no fix**
 (:data:`NO_FIX`) with fewer than 4 heard anchors.
 """
@@ -49,18 +57,23 @@ QUALITY = {
 }
 #: anchors left out and solved again per dropping step (the largest deleted residuals)
 CANDIDATES = 2
-#: the most subsets the exhaustive search of step 4 solves for one fix (8 anchors: every
-#: subset of 7 and 6, and 60 of the 56 + … of 5 before it gives up)
-SUBSET_BUDGET = 96
+#: the most minimal sets (4 anchors) step 4 tries for one fix (8 anchors: all 70)
+HYPOTHESES = 300
+#: (m, range σs): a range within the larger of the two of a hypothesis' distance is its
+#: inlier before refinement (a minimal set's fix is only roughly right)
+LOOSE = (0.2, 5.0)
+#: (m, range σs): a range shorter than the distance by more than the larger of the two
+#: contradicts the position (an echo makes a range longer, never shorter)
+SHORT = (0.1, 3.0)
+#: the largest position dilution of precision of the anchors of a verified fix: 5 nearly
+#: collinear anchors agree with each other at many positions
+DOP_MAX = 10.0
 #: det(S) ≤ COPLANAR · tr(S)³ of the linear normal equations S: the subset's anchors are
 #: (nearly) coplanar and its linear solution is not used
 COPLANAR = 1e-12
-#: the iterations of one subset's solve: from its linear solution a consistent subset
-#: converges in a few; one that does not is not consistent
+#: the iterations of one dropping step's or one refinement's solve: from a good start a
+#: consistent set converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
-#: a subset's first iterations: one whose normalized residual is then still above
-#: SCREEN_FACTOR times the test's threshold is far from consistent and is not solved on
-SUBSET_SCREEN, SCREEN_FACTOR = 5, 100.0
 
 
 def thresholds(false_alarm: float, M: int) -> np.ndarray:
@@ -140,97 +153,193 @@ def robust_rows(
             x[:] = xb
             T, n = best_T, n - 1
             status[b] = best_st
-        if not (T <= thr[n - 3] and n >= 5):  # step 4
-            T, n, iters = _subsets(
+        short = max(SHORT[0], SHORT[1] * sigma)
+        if not (T <= thr[n - 3] and n >= 5 and _score(ab, R[b], x, 0.0, short)[1] == 0):  # 4
+            T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
                 gtol, sigma, thr, used[b], work,
             )  # fmt: skip
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
-        quality[b] = VERIFIED if (T <= thr[n - 3] and n >= 5) else UNVERIFIED
+        passed = T <= thr[n - 3] and n >= 5 and _dop(ab, used[b], x) <= DOP_MAX
+        quality[b] = VERIFIED if passed else UNVERIFIED
 
 
 @numba.njit(cache=True)
-def _subsets(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-             sigma, thr, used, work):  # fmt: skip  # pragma: no cover - compiled
-    """Step 4 of the module docstring: the largest subset of the heard anchors of rho0 (M,)
-    that passes the test, from size (heard − 1) down to 5. On success x (3,) and used (M,)
-    hold its fix and anchors; returns (T, n, iterations)."""
+def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+               sigma, thr, used, work):  # fmt: skip  # pragma: no cover - compiled
+    """Step 4 of the module docstring for the ranges rho0 (M,) of anchors ab (M, 3): the
+    minimal sets of 4 heard anchors, those of the shortest ranges first, each a hypothesis
+    scored by its contradictions and its inliers (:func:`_score`); a promising one is
+    refined (:func:`_refine`), and the first refined set that passes the test with no
+    contradiction ends the search. On success x (3,) and used (M,) hold the best refined
+    fix and its anchors; returns (T, n, iterations)."""
     M = rho0.shape[0]
-    heard = np.zeros(M, dtype=np.int64)
+    order = np.argsort(np.where(rho0 == rho0, rho0, np.inf))
     h = 0
     for j in range(M):
-        if rho0[j] == rho0[j]:
-            heard[h] = j
-            h += 1
+        h += rho0[j] == rho0[j]
+    if h < 5:
+        return T, n, iters
+    loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
+    c = np.arange(4)
     trial, xt, best_x = np.empty(M), np.empty(3), np.empty(3)
-    mask = np.zeros(h, dtype=np.bool_)
-    best_mask = np.zeros(h, dtype=np.bool_)
-    solves = 0
-    for size in range(h - 1, 4, -1):
-        best_T = math.inf
-        _first_combination(mask, size)
-        while True:
-            trial[:] = np.nan
-            for i in range(h):
-                if mask[i]:
-                    trial[heard[i]] = rho0[heard[i]]
-            if not linear_fix(ab, trial, xt, COPLANAR):  # coplanar anchors: from the first fit
-                xt[:] = x
-            for k in range(3):
-                xt[k] = min(max(xt[k], lo[k]), hi[k])
-            c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly,
-                                 min(max_iter, SUBSET_SCREEN), xtol, ftol, gtol, *work)  # fmt: skip
+    best_short, best_in, best_T = M + 1, 0, T
+    four = np.empty(M)  # the best minimal set's fix, contradictions, T and ranges
+    four_x, four_short, four_T = np.empty(3), M + 1, math.inf
+    for _ in range(HYPOTHESES):
+        trial[:] = np.nan
+        for i in range(4):
+            trial[order[c[i]]] = rho0[order[c[i]]]
+        if not linear_fix(ab, trial, xt, COPLANAR):  # coplanar: solved from the first fit
+            xt[:] = x
+            iters += lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                              xtol, ftol, gtol, *work)[2]  # fmt: skip
+        for k in range(3):
+            xt[k] = min(max(xt[k], lo[k]), hi[k])
+        inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
+        if best_in < 5 and nshort <= four_short:  # no set of 5 yet: the minimal set itself
+            four_short, four_T, iters = _minimal(ab, rho0, xt, trial, four, four_x, four_short,
+                                                 four_T, iters, lo, hi, bounded, poly,
+                                                 max_iter, xtol, ftol, gtol, sigma, short,
+                                                 work)  # fmt: skip
+        if inl >= 5 and _better(nshort, inl, best_short, best_in):
+            Tk, m, it = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
+                                poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
-            Tk = 2.0 * c / (sigma * sigma)
-            if st == 0 and Tk <= SCREEN_FACTOR * thr[size - 3] and max_iter > SUBSET_SCREEN:
-                c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly,
-                                     min(max_iter, SUBSET_ITER) - SUBSET_SCREEN, xtol, ftol,
-                                     gtol, *work)  # fmt: skip
-                iters += it
-                Tk = 2.0 * c / (sigma * sigma)
-            if Tk < best_T:
-                best_T = Tk
+            inl, nshort = _score(ab, rho0, xt, 3.0 * sigma, short)
+            if m >= 5 and _better(nshort, m, best_short, best_in):
+                best_short, best_in, best_T = nshort, m, Tk
                 best_x[:] = xt
-                best_mask[:] = mask
-            solves += 1
-            if solves >= SUBSET_BUDGET or not _next_combination(mask):
-                break
-        if best_T <= thr[size - 3]:
-            x[:] = best_x
-            used[:] = False
-            for i in range(h):
-                used[heard[i]] = best_mask[i]
-            return best_T, size, iters
-        if solves >= SUBSET_BUDGET:
+                for j in range(M):
+                    used[j] = trial[j] == trial[j]
+                if nshort == 0 and Tk <= thr[m - 3]:
+                    break
+        if not _next_colex(c, h):
             break
+    if best_in >= 5:
+        x[:] = best_x
+        return best_T, best_in, iters
+    now = _score(ab, rho0, x, 0.0, short)[1]  # the contradictions of the fix so far
+    if four_short == 0 and four_T <= 200.0 and (now > 0 or four_T < T):
+        x[:] = four_x  # no consistent set of 5: a consistent minimal set no range contradicts
+        for j in range(M):
+            used[j] = four[j] == four[j]
+        return four_T, 4, iters
     return T, n, iters
 
 
 @numba.njit(cache=True)
-def _first_combination(mask, size) -> None:  # pragma: no cover - compiled
-    """mask (h,) set to the first combination of ``size`` (the first ``size`` entries)."""
-    mask[:] = False
-    mask[:size] = True
+def _minimal(ab, rho0, xt, trial, four, four_x, four_short, four_T, iters, lo, hi, bounded, poly,
+             max_iter, xtol, ftol, gtol, sigma, short, work):  # fmt: skip  # pragma: no cover
+    """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
+    squares from xt; kept in four (M,) and four_x (3,) when it has fewer contradictions
+    than the best minimal set so far, or as few and a smaller T; returns the best's
+    (contradictions, T, iterations)."""
+    xm = xt.copy()
+    c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                         xtol, ftol, gtol, *work)  # fmt: skip
+    Tm = 2.0 * c / (sigma * sigma)
+    nshort = _score(ab, rho0, xm, 0.0, short)[1]
+    if nshort < four_short or (nshort == four_short and Tm < four_T):
+        four[:] = trial
+        four_x[:] = xm
+        return nshort, Tm, iters + it
+    return four_short, four_T, iters + it
+
+
+@numba.njit(cache=True, inline="always")
+def _better(nshort, inl, best_short, best_in) -> bool:  # pragma: no cover - compiled
+    """Fewer contradictions, then more inliers."""
+    return nshort < best_short or (nshort == best_short and inl > best_in)
 
 
 @numba.njit(cache=True)
-def _next_combination(mask) -> bool:  # pragma: no cover - compiled
-    """In place: the next combination of the same size in lexicographic order of the set
-    bits' positions (a set bit moves right); False after the last one."""
-    h = mask.shape[0]
-    # the rightmost set bit that can move right
-    ones = 0
-    for i in range(h - 1, -1, -1):
-        if mask[i]:
-            if i < h - 1 - ones:
-                mask[i] = False
-                for k in range(i + 1, h):
-                    mask[k] = k <= i + 1 + ones
-                return True
-            ones += 1
+def _refine(ab, rho0, x, trial, loose, tight, lo, hi, bounded, poly, max_iter, xtol, ftol,
+            gtol, sigma, work):  # fmt: skip  # pragma: no cover - compiled
+    """In place on x (3,): the least-squares fix on the anchors whose range is within
+    ``loose`` m of x's distance, then on those within ``tight`` m of the new fix (trial
+    (M,) ends holding their ranges, NaN elsewhere); returns (T, anchors, iterations)."""
+    iters, T = 0, math.inf
+    for tol in (loose, tight):
+        m = _inliers(ab, rho0, x, tol, trial)
+        if m < 5:
+            return T, m, iters
+        c, st, it = lm_solve(ab, trial, x, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                             xtol, ftol, gtol, *work)  # fmt: skip
+        iters += it
+        T = 2.0 * c / (sigma * sigma)
+    return T, m, iters
+
+
+@numba.njit(cache=True)
+def _score(ab, rho0, x, tol, short) -> tuple[int, int]:  # pragma: no cover - compiled
+    """(inliers, contradictions) of the position x (3,): the heard anchors whose range is
+    within ``tol`` m of their distance, and those whose range is shorter than their
+    distance by more than ``short`` m (no path is shorter than the direct one)."""
+    inl = nshort = 0
+    for j in range(ab.shape[0]):
+        if rho0[j] == rho0[j]:
+            e = _distance(x, ab[j]) - rho0[j]
+            inl += abs(e) <= tol
+            nshort += e > short
+    return inl, nshort
+
+
+@numba.njit(cache=True)
+def _inliers(ab, rho0, x, tol, trial) -> int:  # pragma: no cover - compiled
+    """trial (M,): the ranges of rho0 (M,) within ``tol`` m of their anchor's distance from
+    x (3,), NaN elsewhere; returns how many."""
+    m = 0
+    for j in range(ab.shape[0]):
+        trial[j] = np.nan
+        if rho0[j] == rho0[j] and abs(_distance(x, ab[j]) - rho0[j]) <= tol:
+            trial[j] = rho0[j]
+            m += 1
+    return m
+
+
+@numba.njit(cache=True, inline="always")
+def _distance(x, a) -> float:  # pragma: no cover - compiled
+    return math.sqrt((x[0] - a[0]) ** 2 + (x[1] - a[1]) ** 2 + (x[2] - a[2]) ** 2)
+
+
+@numba.njit(cache=True)
+def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
+    """In place: the next k-subset c (k,) (increasing indices into 0..h−1) in colexicographic
+    order, the subsets of the first indices before any that needs a later one; False after
+    the last."""
+    k = c.shape[0]
+    for i in range(k):
+        top = c[i + 1] if i + 1 < k else h
+        if c[i] + 1 < top:
+            c[i] += 1
+            for m in range(i):
+                c[m] = m
+            return True
     return False
+
+
+@numba.njit(cache=True)
+def _dop(ab, used, x) -> float:  # pragma: no cover - compiled
+    """The position dilution of precision √tr((UᵀU)⁻¹) of the anchors ``used`` (M,) at x
+    (3,), U the unit vectors from them to x; inf when they do not fix x (collinear)."""
+    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
+    for j in range(ab.shape[0]):
+        d = _distance(x, ab[j])
+        if used[j] and d > 0:
+            u0, u1, u2 = (x[0] - ab[j, 0]) / d, (x[1] - ab[j, 1]) / d, (x[2] - ab[j, 2]) / d
+            s00 += u0 * u0
+            s01 += u0 * u1
+            s02 += u0 * u2
+            s11 += u1 * u1
+            s12 += u1 * u2
+            s22 += u2 * u2
+    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+    c11, c22 = s00 * s22 - s02 * s02, s00 * s11 - s01 * s01
+    det = s00 * c00 + s01 * c01 + s02 * c02
+    return math.sqrt((c00 + c11 + c22) / det) if det > 0 else math.inf
 
 
 @numba.njit(cache=True)

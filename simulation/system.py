@@ -13,8 +13,12 @@ Presets (:meth:`System.preset`):
   window (192 samples at 192 kHz) 29 ms in, the strongest arrival (peak pick), least
   squares started inside the room's box and not kept in the room.
 - ``"recommended"``: the 20 ms first-path receiver (a window of 20 ms that closes with the
-  chirp) and positioning that rejects echoes (:mod:`simulation.robust`), kept in the floor
-  plan.
+  chirp) with a detection threshold (:data:`RECOMMENDED_FALSE_ALARM` per window), and
+  positioning that rejects echoes (:mod:`simulation.robust`), kept in the floor plan. The
+  threshold matters where an obstacle hides an anchor: its window then holds echoes and
+  noise only, and a receiver that does not know its noise floor can pick a noise lobe
+  before any path arrives, a range shorter than the direct path that no consistency test
+  can explain (docs/model.md, "The system: signal, receiver, positioning").
 
 A system is also a TOML table (:meth:`System.from_toml`, :meth:`System.to_dict`):
 
@@ -184,9 +188,10 @@ class System:
 
     @classmethod
     def recommended(cls) -> System:
-        """The 20 ms first-path receiver with echoes rejected and positions kept in the
-        floor plan (module docstring)."""
+        """The 20 ms first-path receiver with a detection threshold, echoes rejected and
+        positions kept in the floor plan (module docstring)."""
         base = closing_window(cls(), 20e-3, "first-path")
+        base = base.with_signal(false_alarm=RECOMMENDED_FALSE_ALARM)
         positioning = Positioning(method="robust", keep_in_room=True)
         return dataclasses.replace(base, positioning=positioning, name="recommended")
 
@@ -321,6 +326,8 @@ class System:
         return dataclasses.replace(self, chirp=chirp, receiver=rx, name="custom")
 
 
+#: the recommended receiver's detection threshold: its false-alarm bound per window
+RECOMMENDED_FALSE_ALARM = 1e-3
 #: the presets by name (module docstring)
 PRESETS = {"paper": System.paper, "recommended": System.recommended}
 #: a system table's parts and the classes of their fields

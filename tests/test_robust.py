@@ -170,6 +170,64 @@ def test_positions_kept_in_the_floor_plan_not_its_box():
     assert not np.all(in_plan(free))  # the box alone lets some into the missing corner
 
 
+# sixteen anchors on the walls and ceiling of a 12 x 8 x 4 m hall
+HALL = (np.zeros(3), np.array([12.0, 8.0, 4.0]))
+SIXTEEN = np.array(
+    [[0.03, y, z] for y, z in ((1, 1), (4, 3.5), (7, 2))]
+    + [[11.97, y, z] for y, z in ((1.5, 3), (4.5, 0.8), (6.5, 3.6))]
+    + [[x, 0.03, z] for x, z in ((3, 2.5), (6, 0.6), (9, 3.2))]
+    + [[x, 7.97, z] for x, z in ((2.5, 0.9), (6.5, 3.3), (10, 1.7))]
+    + [[x, y, 3.97] for x, y in ((3, 2), (9, 6), (6, 4.5), (2, 6.5))]
+)
+
+
+def test_with_sixteen_anchors_half_of_them_echoes_the_direct_ones_are_found():
+    """Up to 8 of 16 ranges lengthened by an echo (0.3–3 m): step 4's consensus finds the
+    direct ranges, whatever their number of subsets, and the fix is verified within
+    centimetres of the node."""
+    rng = np.random.default_rng(11)
+    for trial in range(30):
+        x = rng.uniform([1, 1, 0.5], [11, 7, 2.0])
+        rho = np.linalg.norm(x - SIXTEEN, axis=1) + SIGMA * rng.standard_normal(16)
+        echoes = rng.choice(16, size=4 + trial % 5, replace=False)
+        rho[echoes] += rng.uniform(0.3, 3.0, len(echoes))
+        fix = locate(SIXTEEN, rho[None], method="robust", region=HALL, bounded=True,
+                     range_sigma=SIGMA, full_output=True)  # fmt: skip
+        assert fix.quality[0] == VERIFIED, trial
+        assert not fix.used[0, echoes].any(), trial
+        assert np.linalg.norm(fix.x[0] - x) < 0.05, trial
+
+
+def test_a_direct_range_shorter_than_the_fix_puts_it_elsewhere():
+    """A range shorter than its anchor's distance from a fix contradicts the fix (no path is
+    shorter than the direct one): the fixes kept have no such range."""
+    rng = np.random.default_rng(12)
+    for _ in range(30):
+        x = rng.uniform([1, 1, 0.5], [11, 7, 2.0])
+        rho = np.linalg.norm(x - SIXTEEN, axis=1) + SIGMA * rng.standard_normal(16)
+        echoes = rng.choice(16, size=8, replace=False)
+        rho[echoes] += rng.uniform(0.3, 3.0, 8)
+        fix = locate(SIXTEEN, rho[None], method="robust", region=HALL, bounded=True,
+                     range_sigma=SIGMA, full_output=True)  # fmt: skip
+        assert np.all(np.linalg.norm(fix.x[0] - SIXTEEN, axis=1) - rho <= 0.1 + 1e-9)
+
+
+def test_five_anchors_on_one_line_do_not_verify_a_fix():
+    """Five anchors within centimetres of one line agree with nearly a whole circle of
+    positions: their consensus is not a verified fix (the dilution of precision is in the
+    hundreds), however well they agree; sixteen anchors around the hall verify it."""
+    a = np.array([[x, 4.0, 3.97 - dz] for x, dz in ((1, 0), (3.5, 0.02), (6, 0), (8.5, 0.01),
+                                                     (11, 0.02))])  # fmt: skip
+    x = np.array([5.0, 2.5, 1.2])
+    fix = locate(a, np.linalg.norm(x - a, axis=1)[None], method="robust", region=HALL,
+                 bounded=True, full_output=True)  # fmt: skip
+    assert fix.used[0].all() and 2 * fix.cost[0] / SIGMA**2 < thresholds(1e-3, 5)[2]  # agree
+    assert fix.quality[0] == UNVERIFIED
+    good = locate(SIXTEEN, np.linalg.norm(x - SIXTEEN, axis=1)[None], method="robust",
+                  region=HALL, bounded=True, full_output=True)  # fmt: skip
+    assert good.quality[0] == VERIFIED
+
+
 @pytest.mark.parametrize(
     ("kw", "names"),
     [
