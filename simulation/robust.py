@@ -28,7 +28,9 @@ schemes (Casas et al., 2006):
    one better than the best so far is refined by least squares on its inliers, then on
    those within 3σ of the refined fix; the first refined set of 5 or more that passes the
    test with no contradiction ends the search (at most :data:`HYPOTHESES` minimal sets),
-   else the best one is kept;
+   else the best one is kept; where no 5 anchors agree, the minimal set that no range
+   contradicts and whose 4 ranges agree (T at most :data:`MINIMAL_T`; the smallest T) is
+   the fix when the fix so far has a contradiction or a larger T;
 5. the fix is the least-squares position on the anchors kept.
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
@@ -65,6 +67,9 @@ LOOSE = (0.2, 5.0)
 #: (m, range σs): a range shorter than the distance by more than the larger of the two
 #: contradicts the position (an echo makes a range longer, never shorter)
 SHORT = (0.1, 3.0)
+#: the largest normalized residual T of a minimal set taken where no 5 anchors agree: its 4
+#: ranges agree to about 7 cm (anchors are mounted within centimetres of the plan)
+MINIMAL_T = 200.0
 #: the largest position dilution of precision of the anchors of a verified fix: 5 nearly
 #: collinear anchors agree with each other at many positions
 DOP_MAX = 10.0
@@ -222,7 +227,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         x[:] = best_x
         return best_T, best_in, iters
     now = _score(ab, rho0, x, 0.0, short)[1]  # the contradictions of the fix so far
-    if four_short == 0 and four_T <= 200.0 and (now > 0 or four_T < T):
+    if four_short == 0 and four_T <= MINIMAL_T and (now > 0 or four_T < T):
         x[:] = four_x  # no consistent set of 5: a consistent minimal set no range contradicts
         for j in range(M):
             used[j] = four[j] == four[j]

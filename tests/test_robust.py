@@ -212,6 +212,23 @@ def test_a_direct_range_shorter_than_the_fix_puts_it_elsewhere():
         assert np.all(np.linalg.norm(fix.x[0] - SIXTEEN, axis=1) - rho <= 0.1 + 1e-9)
 
 
+def test_four_direct_ranges_among_four_echoes_are_found_unverified():
+    """A tag that sees 4 of 8 anchors: no 5 agree, but the 4 direct ranges are the minimal
+    set whose fix no echo contradicts (every echo is longer than its anchor's distance from
+    it): they are kept, and the fix is unverified (nothing is left to check it)."""
+    rng = np.random.default_rng(13)
+    for trial in range(40):
+        x = _nodes(rng, 1)[0]
+        rho = np.linalg.norm(x - ANCHORS, axis=1) + SIGMA * rng.standard_normal(8)
+        echoes = rng.choice(8, size=4, replace=False)
+        rho[echoes] += rng.uniform(0.3, 3.0, 4)
+        fix = locate(ANCHORS, rho[None], method="robust", region=REGION, bounded=True,
+                     range_sigma=SIGMA, full_output=True)  # fmt: skip
+        assert set(np.flatnonzero(fix.used[0])) == set(range(8)) - set(echoes), trial
+        assert fix.quality[0] == UNVERIFIED
+        assert np.linalg.norm(fix.x[0] - x) < 0.3, trial  # 4 anchors: σ times their DOP
+
+
 def test_five_anchors_on_one_line_do_not_verify_a_fix():
     """Five anchors within centimetres of one line agree with nearly a whole circle of
     positions: their consensus is not a verified fix (the dilution of precision is in the
