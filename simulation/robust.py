@@ -167,8 +167,7 @@ def robust_rows(
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
-        passed = T <= thr[n - 3] and n >= 5 and _dop(ab, used[b], x) <= DOP_MAX
-        quality[b] = VERIFIED if passed else UNVERIFIED
+        quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, rho, work)
 
 
 @numba.njit(cache=True)
@@ -327,33 +326,33 @@ def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _dop(ab, used, x) -> float:  # pragma: no cover - compiled
-    """The position dilution of precision √tr((UᵀU)⁻¹) of the anchors ``used`` (M,) at x
-    (3,), U the unit vectors from them to x; inf when they do not fix x (collinear)."""
-    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
-    for j in range(ab.shape[0]):
-        d = _distance(x, ab[j])
-        if used[j] and d > 0:
-            u0, u1, u2 = (x[0] - ab[j, 0]) / d, (x[1] - ab[j, 1]) / d, (x[2] - ab[j, 2]) / d
-            s00 += u0 * u0
-            s01 += u0 * u1
-            s02 += u0 * u2
-            s11 += u1 * u1
-            s12 += u1 * u2
-            s22 += u2 * u2
-    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c11, c22 = s00 * s22 - s02 * s02, s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
-    return math.sqrt((c00 + c11 + c22) / det) if det > 0 else math.inf
+def _quality(ab, rho0, used, x, T, n, thr, rho, work) -> int:  # pragma: no cover - compiled
+    """:data:`VERIFIED` when the n anchors ``used`` (M,) pass the test (T ≤ thr[n − 3],
+    n ≥ 5) and fix x (3,) (:func:`_dop` ≤ :data:`DOP_MAX`), else :data:`UNVERIFIED`; rho
+    (M,) is scratch."""
+    if not (T <= thr[n - 3] and n >= 5):
+        return UNVERIFIED
+    for j in range(rho0.shape[0]):
+        rho[j] = rho0[j] if used[j] else np.nan
+    return VERIFIED if _dop(ab, rho, x, work[0], work[1]) <= DOP_MAX else UNVERIFIED
 
 
 @numba.njit(cache=True)
-def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
-    """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
-    the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
+def _dop(ab, rho, x, r, u) -> float:  # pragma: no cover - compiled
+    """The position dilution of precision √tr((UᵀU)⁻¹) at x (3,) of the anchors ab (M, 3)
+    whose range in rho (M,) is not NaN, U the unit vectors from them to x (r, u scratch);
+    inf when they do not fix x (collinear)."""
     residuals(x, ab, rho, r, u)
+    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
+    return math.sqrt((c00 + c11 + c22) / det) if det > 0 else math.inf
+
+
+@numba.njit(cache=True, inline="always")
+def _cofactors(u):  # pragma: no cover - compiled
+    """(c00, c01, c02, c11, c12, c22, det): the cofactors and the determinant of the
+    symmetric S = Σ_j u_j u_jᵀ of the rows of u (M, 3)."""
     s00 = s01 = s02 = s11 = s12 = s22 = 0.0
-    for j in range(ab.shape[0]):
+    for j in range(u.shape[0]):
         s00 += u[j, 0] * u[j, 0]
         s01 += u[j, 0] * u[j, 1]
         s02 += u[j, 0] * u[j, 2]
@@ -362,7 +361,15 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
         s22 += u[j, 2] * u[j, 2]
     c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
     c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
+    return c00, c01, c02, c11, c12, c22, s00 * c00 + s01 * c01 + s02 * c02
+
+
+@numba.njit(cache=True)
+def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
+    """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
+    the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
+    residuals(x, ab, rho, r, u)
+    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
     for j in range(ab.shape[0]):
         if rho[j] != rho[j]:
             score[j] = -math.inf
