@@ -1,0 +1,82 @@
+"""Where a layout's wrong fixes come from: the field's tags grouped by how many anchors
+they see in line of sight (BENCHMARKS.md, "Rooms with obstacles").
+
+Run:
+
+    python benchmarks/bench_fix_tail.py docs/examples/l-shaped-lab-recommended
+    python benchmarks/bench_fix_tail.py docs/benchmarks/robust/l-shaped-lab-recommended-before \\
+        --room examples/l-shaped-lab.toml \\
+        --system docs/benchmarks/robust/recommended-no-detection.toml
+
+The layout of RESULT_DIR/layout.json (the room and system of its result.json unless
+``--room`` / ``--system`` are given) in ``--draws`` field draws (300 random tags in the
+zones, anchors mounted within 3 cm, the validation's streams of seed 0), positions solved
+by the system. One JSON line per number of anchors in sight: the tags, the share of fixes
+more than ``--off`` m off, the verified share; then one line on the fixes that are off:
+the share that rest on a hidden anchor whose range is shorter than its direct distance by
+more than 0.1 m (a range no path explains: the receiver picked noise before any path
+arrived).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from _common import emit
+
+from placement.validation import _mounted_ranges, random_nodes
+from simulation import Room, System, streams
+from simulation.polyhedral import line_of_sight
+
+
+def _scene(args):
+    folder = Path(args.result_dir)
+    anchors = np.array(json.loads((folder / "layout.json").read_text())["anchors"], dtype=float)
+    res = {}
+    if args.room is None or args.system is None:
+        res = json.loads((folder / "result.json").read_text())
+    room = Room.from_toml(args.room) if args.room else Room.from_dict(res["room"])
+    if args.system is None:
+        system = System.from_dict(res["system"])
+    elif args.system.endswith(".toml"):
+        system = System.from_toml(args.system)
+    else:
+        system = System.preset(args.system)
+    return room, system, anchors
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("result_dir")
+    ap.add_argument("--room", help="a room file (default: the result's room)")
+    ap.add_argument("--system", help="a preset or a TOML file (default: the result's)")
+    ap.add_argument("--draws", type=int, default=5)
+    ap.add_argument("--off", type=float, default=0.3, help="a fix this far off is wrong, m")
+    args = ap.parse_args()
+    room, system, anchors = _scene(args)
+    seen, off, verified, short = [], [], [], []
+    for d in range(args.draws):
+        nodes = random_nodes(room, 300, streams.stream(0, 0, d))
+        R = _mounted_ranges(room, system, anchors, nodes, 0.03, d, 0, None, 1)
+        fix = system.positioning.locate(room, anchors, R, full_output=True)
+        los = line_of_sight(room, anchors, nodes)
+        dist = np.linalg.norm(nodes[:, None] - anchors[None], axis=-1)
+        seen.append(los.sum(axis=1))
+        off.append(np.linalg.norm(fix.x - nodes, axis=-1) > args.off)
+        verified.append(fix.verified)
+        short.append(np.any(~los & (dist - R > 0.1), axis=1))  # NaN compares False
+    seen, off, verified, short = map(np.concatenate, (seen, off, verified, short))
+    for k in np.unique(seen):
+        m = seen == k
+        emit("fix_tail", room=room.name, system=system.name, seen=int(k), tags=int(m.sum()),
+             off=float(off[m].mean()), verified=float(verified[m].mean()))  # fmt: skip
+    emit("fix_tail_off", room=room.name, system=system.name, tags=int(seen.size),
+         off=float(off.mean()), off_with_short_hidden_range=float(np.mean(short[off]))
+         if off.any() else 0.0)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
