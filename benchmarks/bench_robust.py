@@ -39,6 +39,8 @@ ROOMS = {
     "l-shaped-lab": ("examples/l-shaped-lab.toml", "l-shaped-lab"),
     "warehouse-aisles": ("examples/warehouse-aisles.toml", "warehouse-aisles"),
     "office": ("examples/office.toml", "office"),
+    "hall": ("examples/hall.toml", "hall"),
+    "ordinary-room": ("examples/ordinary-room.toml", "ordinary-room"),
 }
 
 
@@ -99,8 +101,13 @@ def main() -> None:
             e = np.linalg.norm(fix.x - scene.nodes, axis=-1).ravel()
             v = fix.verified.ravel()
             f = e[np.isfinite(e)]
+            if f.size == 0:  # no node heard 4 anchors: nothing to describe
+                emit("robust", room=room.name, receiver=args.receiver, solver=label,
+                     anchors=len(anchors), fixes=int(e.size), found=0)  # fmt: skip
+                continue
             emit("robust", room=room.name, receiver=args.receiver, solver=label,
-                 anchors=len(anchors), fixes=int(e.size), median=float(np.median(f)),
+                 anchors=len(anchors), fixes=int(e.size), found=int(f.size),
+                 median=float(np.median(f)),
                  mean=float(f.mean()), p95=float(np.percentile(f, 95)), std=float(f.std()),
                  verified=float(v.mean()), range_sigma=args.range_sigma,
                  verified_wrong=float(np.mean(v & (e > 0.5)) / max(v.mean(), 1e-12)),
