@@ -56,6 +56,16 @@ def read_lines(paths: list[str]) -> list[dict]:
     return rows
 
 
+def with_room_chirp(system, own):
+    """``system`` with the chirp duration of the room file's system ``own`` (a long chirp
+    for a large room) and its window moved by the same shift, so that it still closes where
+    it did relative to the chirp's end."""
+    if own.chirp.duration == system.chirp.duration:
+        return system
+    shift = own.chirp.duration - system.chirp.duration
+    return system.with_signal(duration=own.chirp.duration, t_wake=system.receiver.t_wake + shift)
+
+
 def emit(name: str, **fields) -> None:
     """Print one JSON line: the benchmark name, its figures and the machine."""
     rec = {

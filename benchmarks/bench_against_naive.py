@@ -24,8 +24,9 @@ import numpy as np
 from _common import emit
 
 from placement import naive_layout
+from placement.cli.common import system_choice
 from placement.validation import field_errors
-from simulation import Room, System
+from simulation import Room
 
 
 def main() -> None:
@@ -36,8 +37,7 @@ def main() -> None:
     ap.add_argument("--draws", type=int, default=10)
     args = ap.parse_args()
     room = Room.from_toml(args.room)
-    system = (System.from_toml(args.system) if args.system.endswith(".toml")
-              else System.preset(args.system))  # fmt: skip
+    system = system_choice(args.system)
     planned = np.array(json.loads((Path(args.result_dir) / "layout.json").read_text())["anchors"])
     layouts = {"planned": planned, "naive": naive_layout(room, len(planned)),
                "corners": room.corners_layout()}  # fmt: skip

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import emit
+from _common import emit, with_room_chirp
 
 from analysis.coverage import heard
 from placement.coverage import plane_groups, select_coverage
@@ -37,11 +37,7 @@ def main() -> None:
     args = ap.parse_args()
     room = Room.from_toml(ROOT / args.room)
     own = System.from_toml(ROOT / args.room)
-    system = System.recommended()
-    if own.chirp.duration != system.chirp.duration:  # a long chirp for a large room
-        shift = own.chirp.duration - system.chirp.duration
-        system = system.with_signal(duration=own.chirp.duration,
-                                    t_wake=system.receiver.t_wake + shift)  # fmt: skip
+    system = with_room_chirp(System.recommended(), own)
     nodes = room.grid()
     cand = candidate_grid(room, args.spacing)
     V = heard(room, cand, nodes, system=system)

@@ -27,25 +27,18 @@ from pathlib import Path
 import numpy as np
 from _common import emit
 
+from placement.cli.common import plan_system
 from placement.validation import _mounted_ranges, random_nodes
-from simulation import Room, System, streams
+from simulation import Room, streams
 from simulation.polyhedral import line_of_sight
 
 
 def _scene(args):
     folder = Path(args.result_dir)
     anchors = np.array(json.loads((folder / "layout.json").read_text())["anchors"], dtype=float)
-    res = {}
-    if args.room is None or args.system is None:
-        res = json.loads((folder / "result.json").read_text())
+    res = {} if args.room else json.loads((folder / "result.json").read_text())
     room = Room.from_toml(args.room) if args.room else Room.from_dict(res["room"])
-    if args.system is None:
-        system = System.from_dict(res["system"])
-    elif args.system.endswith(".toml"):
-        system = System.from_toml(args.system)
-    else:
-        system = System.preset(args.system)
-    return room, system, anchors
+    return room, plan_system(folder, args.system), anchors
 
 
 def main() -> None:

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _common import emit
+from _common import emit, with_room_chirp
 
 from simulation import Positioning, Room, System
 from simulation.evaluation import RangingScene
@@ -51,10 +51,7 @@ def _scene(name: str, receiver: str):
     room = Room.techtile() if path is None else Room.from_toml(ROOT / path)
     own = System() if path is None else System.from_toml(ROOT / path)
     system = System.recommended() if receiver == "recommended" else System()
-    if own.chirp.duration != system.chirp.duration:  # a long chirp for a large room
-        shift = own.chirp.duration - system.chirp.duration
-        system = system.with_signal(duration=own.chirp.duration,
-                                    t_wake=system.receiver.t_wake + shift)  # fmt: skip
+    system = with_room_chirp(system, own)
     layout = ROOT / "docs" / "examples" / example / "layout.json"
     anchors = (np.array(json.loads(layout.read_text())["anchors"]) if layout.exists()
                else room.corners_layout())  # fmt: skip

@@ -119,6 +119,7 @@ def robust_rows(
     x, xt, xb = np.empty(3), np.empty(3), np.empty(3)
     score = np.empty(M)
     drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
+    loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
     for b in range(R.shape[0]):
         for j in range(M):
             used[b, j] = R[b, j] == R[b, j]
@@ -158,11 +159,10 @@ def robust_rows(
             x[:] = xb
             T, n = best_T, n - 1
             status[b] = best_st
-        short = max(SHORT[0], SHORT[1] * sigma)
         if not (T <= thr[n - 3] and n >= 5 and _score(ab, R[b], x, 0.0, short)[1] == 0):  # 4
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, thr, used[b], work,
+                gtol, sigma, thr, loose, short, used[b], work,
             )  # fmt: skip
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
@@ -172,13 +172,14 @@ def robust_rows(
 
 @numba.njit(cache=True)
 def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-               sigma, thr, used, work):  # fmt: skip  # pragma: no cover - compiled
+               sigma, thr, loose, short, used, work):  # fmt: skip  # pragma: no cover
     """Step 4 of the module docstring for the ranges rho0 (M,) of anchors ab (M, 3): the
     minimal sets of 4 heard anchors, those of the shortest ranges first, each a hypothesis
     scored by its contradictions and its inliers (:func:`_score`); a promising one is
     refined (:func:`_refine`), and the first refined set that passes the test with no
-    contradiction ends the search. On success x (3,) and used (M,) hold the best refined
-    fix and its anchors; returns (T, n, iterations)."""
+    contradiction ends the search (``loose``, ``short``: :data:`LOOSE`, :data:`SHORT` in
+    metres). On success x (3,) and used (M,) hold the best refined fix and its anchors;
+    returns (T, n, iterations)."""
     M = rho0.shape[0]
     order = np.argsort(np.where(rho0 == rho0, rho0, np.inf))
     h = 0
@@ -186,9 +187,8 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         h += rho0[j] == rho0[j]
     if h < 5:
         return T, n, iters
-    loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
     c = np.arange(4)
-    trial, xt, best_x = np.empty(M), np.empty(3), np.empty(3)
+    trial, xt, xm, best_x = np.empty(M), np.empty(3), np.empty(3), np.empty(3)
     best_short, best_in, best_T = M + 1, 0, T
     four = np.empty(M)  # the best minimal set's fix, contradictions, T and ranges
     four_x, four_short, four_T = np.empty(3), M + 1, math.inf
@@ -204,7 +204,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             xt[k] = min(max(xt[k], lo[k]), hi[k])
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         if best_in < 5 and nshort <= four_short:  # no set of 5 yet: the minimal set itself
-            four_short, four_T, iters = _minimal(ab, rho0, xt, trial, four, four_x, four_short,
+            four_short, four_T, iters = _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short,
                                                  four_T, iters, lo, hi, bounded, poly,
                                                  max_iter, xtol, ftol, gtol, sigma, short,
                                                  work)  # fmt: skip
@@ -212,7 +212,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             Tk, m, it = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
                                 poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
-            inl, nshort = _score(ab, rho0, xt, 3.0 * sigma, short)
+            nshort = _score(ab, rho0, xt, 3.0 * sigma, short)[1]
             if m >= 5 and _better(nshort, m, best_short, best_in):
                 best_short, best_in, best_T = nshort, m, Tk
                 best_x[:] = xt
@@ -235,13 +235,13 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
 
 
 @numba.njit(cache=True)
-def _minimal(ab, rho0, xt, trial, four, four_x, four_short, four_T, iters, lo, hi, bounded, poly,
-             max_iter, xtol, ftol, gtol, sigma, short, work):  # fmt: skip  # pragma: no cover
+def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, lo, hi, bounded,
+             poly, max_iter, xtol, ftol, gtol, sigma, short, work):  # fmt: skip  # pragma: no cover
     """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
-    squares from xt; kept in four (M,) and four_x (3,) when it has fewer contradictions
-    than the best minimal set so far, or as few and a smaller T; returns the best's
-    (contradictions, T, iterations)."""
-    xm = xt.copy()
+    squares from xt into the scratch xm (3,); kept in four (M,) and four_x (3,) when it has
+    fewer contradictions than the best minimal set so far, or as few and a smaller T;
+    returns the best's (contradictions, T, iterations)."""
+    xm[:] = xt
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
