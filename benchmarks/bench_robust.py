@@ -9,7 +9,8 @@ Run:
 
 For each room (its committed example layout planned for that receiver,
 docs/examples/<room>-recommended/layout.json for the recommended one where it exists, else
-docs/examples/<room>/layout.json, else the corners layout), ``--realizations`` noise
+docs/examples/<room>/layout.json, else the corners layout; or ``--layout``),
+``--realizations`` noise
 realizations of the simulated ranges at the room's nodes with the receiver of
 ``--receiver`` (the recommended system's 20 ms first-path receiver, or the paper's),
 solved by least squares (unbounded, and kept in the room) and by the robust method kept in
@@ -44,7 +45,7 @@ ROOMS = {
 }
 
 
-def _scene(name: str, receiver: str):
+def _scene(name: str, receiver: str, layout: Path | None = None):
     path, example = ROOMS[name]
     if (ROOT / "docs" / "examples" / f"{example}-{receiver}").is_dir():
         example = f"{example}-{receiver}"  # the layout planned for that receiver
@@ -52,7 +53,7 @@ def _scene(name: str, receiver: str):
     own = System() if path is None else System.from_toml(ROOT / path)
     system = System.recommended() if receiver == "recommended" else System()
     system = with_room_chirp(system, own)
-    layout = ROOT / "docs" / "examples" / example / "layout.json"
+    layout = layout or ROOT / "docs" / "examples" / example / "layout.json"
     anchors = (np.array(json.loads(layout.read_text())["anchors"]) if layout.exists()
                else room.corners_layout())  # fmt: skip
     return room, system, anchors
@@ -70,7 +71,14 @@ def main() -> None:
         default=0.01,
         help="the robust solver's range sigma, m (the paper receiver's: about 0.1)",
     )
+    ap.add_argument(
+        "--layout",
+        type=Path,
+        help="a layout.json (its anchors) to use instead of the committed example's; one room",
+    )
     args = ap.parse_args()
+    if args.layout is not None and len(args.rooms) != 1:
+        ap.error(f"--layout: needs exactly one room in --rooms, got {len(args.rooms)}")
     solvers = {
         "ls": Positioning(),
         "ls kept in the room": Positioning(keep_in_room=True),
@@ -79,7 +87,8 @@ def main() -> None:
         ),
     }
     for name in args.rooms:
-        room, system, anchors = _scene(name, args.receiver)
+        room, system, anchors = _scene(name, args.receiver, args.layout)
+        where = str(args.layout) if args.layout else "the committed example"
         scene = RangingScene(room, anchors, system=system)
         rngs = [np.random.default_rng(r) for r in range(args.realizations)]
         R = scene.ranges_batch(rngs)
@@ -103,7 +112,7 @@ def main() -> None:
                      anchors=len(anchors), fixes=int(e.size), found=0)  # fmt: skip
                 continue
             emit("robust", room=room.name, receiver=args.receiver, solver=label,
-                 anchors=len(anchors), fixes=int(e.size), found=int(f.size),
+                 layout=where, anchors=len(anchors), fixes=int(e.size), found=int(f.size),
                  median=float(np.median(f)),
                  mean=float(f.mean()), p95=float(np.percentile(f, 95)), std=float(f.std()),
                  verified=float(v.mean()), range_sigma=args.range_sigma,

@@ -1,20 +1,18 @@
 """Fixes checked against the room's map: a robust fix must be one the room allows
 (docs/model.md, "Positioning that rejects echoes").
 
-The residual test (:mod:`simulation.robust`) cannot tell a true position from a mirror
-image: when one face of an obstacle reflects the chirps of several anchors towards the
-tag, their echo ranges agree with each other, as if the tag stood at its mirror image
-behind the face, and 5 of them pass the test as readily as 5 direct ranges. The room's
-geometry tells them apart. A range the fix rests on is a direct path only if the straight
-segment from the fix to that anchor is free (:func:`simulation.polyhedral.line_of_sight`);
-a fix rests on a hidden anchor, or lies inside an obstacle, only if it is wrong.
+The residual test alone cannot tell a true position from a mirror image: when one face of
+an obstacle reflects the chirps of several anchors towards the tag, their echo ranges agree
+with each other, as if the tag stood at its mirror image behind the face, and 5 of them
+pass the test as readily as 5 direct ranges. The room's geometry tells them apart: a range
+the fix rests on is a direct path only if the straight segment from the fix to that anchor
+is free (:func:`simulation.polyhedral.line_of_sight`). The robust search counts such a
+range as a contradiction (:mod:`simulation.robust`), and it keeps a contradicted fix only
+where no set without one agrees.
 
-So a fix that rests on a hidden anchor, or lies outside the room, is not verified: it stays
-where the residual test put it, unverified. The check changes what the system vouches for,
-not where it puts the tag. (Solving such a fix again without the hidden ranges was tried:
-it helps a fix now and then, but it changes the positions the planner scores, and in the
-L-shaped lab it led the default plan to a worse layout; BENCHMARKS.md, "Rooms with
-obstacles".)
+This check is what the system vouches for: a fix that rests on a hidden anchor, or lies
+outside the room or inside an obstacle, is not verified. It stays where the search put it,
+unverified.
 
 The check needs the room's map: the positioning must know its room (``keep_in_room``) and
 the room must have something that blocks a path (obstacles, or a floor plan that is not

@@ -382,6 +382,54 @@ def paths(room, anchors: np.ndarray, nodes: np.ndarray, refl: Reflectors | None 
     return length, direction, b, valid, los
 
 
+#: the map of a room where nothing blocks a path (:func:`blocking_map`)
+NO_MAP = (np.empty(0, dtype=np.int64), np.empty((0, 3)), np.empty(0), np.empty((0, 6)),
+          np.empty(0, dtype=bool), np.empty((0, 2)))  # fmt: skip
+
+
+def blocking_map(room) -> tuple:
+    """The room's map of what can block a straight path, for :func:`sees`: (kind, normal,
+    d, box, blocking, plan) of its blocking reflectors (walls of a non-convex floor plan,
+    obstacle faces); empty arrays where nothing can block (a convex room without
+    obstacles)."""
+    if room.is_convex and not room.obstacles:
+        return NO_MAP
+    refl = reflectors(room)
+    keep = refl.blocking
+    return (np.ascontiguousarray(refl.kind[keep]), np.ascontiguousarray(refl.normal[keep]),
+            np.ascontiguousarray(refl.d[keep]), np.ascontiguousarray(refl.box[keep]),
+            np.ones(int(keep.sum()), dtype=bool), refl.plan)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def sees(geo, p, q) -> bool:  # pragma: no cover - compiled
+    """Nothing of the map ``geo`` (:func:`blocking_map`) blocks the segment p (3,) → q (3,)."""
+    kind, normal, d, box, blocking, plan = geo
+    if kind.shape[0] == 0:
+        return True
+    return not _blocked(p[0], p[1], p[2], q[0], q[1], q[2], kind, normal, d, box, blocking,
+                        plan, -1, -1)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def sees_near(geo, p, q, delta, every) -> bool:  # pragma: no cover - compiled
+    """:func:`sees` from p (3,) and the six points ``delta`` m from p along the axes: from
+    one of them (``every`` False: a position known to within centimetres does not hide an
+    anchor it grazes) or from all (``every`` True: the anchor surely sees it)."""
+    kind, normal, d, box, blocking, plan = geo
+    if kind.shape[0] == 0:
+        return True
+    for k in range(7):
+        o0 = delta * ((k == 1) - (k == 2))
+        o1 = delta * ((k == 3) - (k == 4))
+        o2 = delta * ((k == 5) - (k == 6))
+        free = not _blocked(p[0] + o0, p[1] + o1, p[2] + o2, q[0], q[1], q[2], kind, normal,
+                            d, box, blocking, plan, -1, -1)  # fmt: skip
+        if free != every:
+            return free
+    return every
+
+
 def line_of_sight(room, anchors, points) -> np.ndarray:
     """(..., P, M) bool: nothing blocks the straight segment from each point (P, 3) to
     each anchor (..., M, 3) (walls of a non-convex floor plan, obstacle faces). All true

@@ -35,6 +35,7 @@ import numpy as np
 
 from simulation import checks, degeneracy
 from simulation.least_squares import linear_fix, lm_rows
+from simulation.polyhedral import NO_MAP, blocking_map
 from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, robust_rows, thresholds
 
 logger = logging.getLogger(__name__)
@@ -170,6 +171,7 @@ def locate(
     gtol: float = 1e-12,
     range_sigma: float = RANGE_SIGMA,
     false_alarm: float = FALSE_ALARM,
+    room=None,
     full_output: bool = False,
 ):
     """Positions from ranges: anchors (M, 3), ranges (..., P, M) in metres.
@@ -188,6 +190,10 @@ def locate(
     bounded : keep the iterates inside ``region``, and inside ``floor_plan`` when given.
     floor_plan : (K, 2) the floor plan's corners (m, counter-clockwise) a bounded iterate
         is kept in (a position in a cut-out corner of the plan is not in the room).
+    room : the :class:`simulation.Room` whose walls and obstacles can hide an anchor from a
+        position: the robust method counts a range as direct only where nothing of the
+        room blocks the segment from the position to its anchor. Default: nothing hides an
+        anchor.
     x0 : optional (..., P, 3) or (3,) starting points (overrides the start rule).
     max_iter, xtol, ftol, gtol : iteration limit and tolerances (see module docstring).
     full_output : return a :class:`PositionFix` instead of the (..., P, 3) array.
@@ -221,7 +227,8 @@ def locate(
     used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
     if method == "robust":
         used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
-                                poly, int(max_iter), tols, range_sigma, false_alarm)  # fmt: skip
+                                poly, int(max_iter), tols, range_sigma, false_alarm,
+                                None if room is None else blocking_map(room))  # fmt: skip
     converged = status > 0
     if not np.all(converged):
         n = int(np.sum(~converged))
@@ -422,17 +429,21 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols, poly=N
     return out
 
 
-def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, false_alarm):
+def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, false_alarm,
+            room_map):  # fmt: skip
     """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
-    fixes (:mod:`simulation.robust`); returns the anchors used (B, M) and the qualities."""
+    fixes (:mod:`simulation.robust`) on the map ``room_map``
+    (:func:`simulation.polyhedral.blocking_map`; None: nothing hides an anchor); returns
+    the anchors used (B, M) and the qualities."""
     B, M = R.shape
+    geo = room_map if room_map is not None else NO_MAP
     used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
     if B:
         x, cost, status, nit = fix
         robust_rows(_c(a), _c(owner, np.int64), _c(R), x, cost, status, nit,
                     _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
-                    thresholds(false_alarm, M), used, quality)  # fmt: skip
+                    thresholds(false_alarm, M), used, quality, geo)  # fmt: skip
     return used, quality
 
 

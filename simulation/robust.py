@@ -17,21 +17,33 @@ schemes (Casas et al., 2006):
    (at most :data:`SUBSET_ITER` iterations); the one whose removal leaves the smaller T is
    dropped;
 4. when that ends without 5 consistent anchors (two or more echoes can pull the first fit
-   so far that the deleted residuals point at good anchors), or with a dropped range
-   shorter than its anchor's distance from the fix (an echo makes a range longer, never
-   shorter: a direct range was dropped), search for consensus as RANSAC does (Fischler and
-   Bolles, 1981), deterministically: minimal sets of 4 heard anchors, those with the
-   shortest ranges first (a near anchor is more often in sight, and an echo only
-   lengthens a range), each solved from the linear solution of its squared-range
-   differences; a hypothesis is scored by its contradictions (ranges shorter than its
-   distance by more than :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`);
-   one better than the best so far is refined by least squares on its inliers, then on
-   those within 3σ of the refined fix; the first refined set of 5 or more that passes the
-   test with no contradiction ends the search (at most :data:`HYPOTHESES` minimal sets),
-   else the best one is kept; where no 5 anchors agree, the minimal set that no range
-   contradicts and whose 4 ranges agree (T at most :data:`MINIMAL_T`; the smallest T) is
-   the fix when the fix so far has a contradiction or a larger T;
+   so far that the deleted residuals point at good anchors), or with a contradiction
+   (below), search for consensus as RANSAC does (Fischler and Bolles, 1981),
+   deterministically: minimal sets of 4 heard anchors, in the order of their ranges (a
+   near anchor is more often in sight) except that a range proved an echo comes after
+   all the others (an echo only lengthens a range, so r_j − r_k − |a_j − a_k| is a lower
+   bound of range j's excess for every heard k: above :data:`SHORT` it is an echo), each
+   solved from the linear solution of its squared-range differences; a hypothesis is
+   scored by its contradictions (ranges shorter than its distance by more than
+   :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one better than the best
+   so far is refined by least squares on its inliers, then on those within 3σ of the
+   refined fix; the first refined set of 5 or more that passes the test with no
+   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets), else the best
+   one is kept; where no 5 anchors agree without a contradiction, the minimal set that
+   nothing contradicts and whose 4 ranges agree (T at most :data:`MINIMAL_T`; the
+   smallest T) is the fix when the fix so far has a contradiction or a larger T;
 5. the fix is the least-squares position on the anchors kept.
+
+A fix's contradictions are its ranges shorter than their distance by more than
+:data:`SHORT` (no path is shorter than the direct one) and, where the positioning knows the
+room's map (walls of a floor plan that is not convex, obstacles;
+:func:`simulation.polyhedral.blocking_map`), two more. A fix that rests on an anchor that
+does not see it (from the fix or from any point :data:`GRAZE` from it along the axes) rests
+on an echo: the echoes off one face agree with each other at the mirror image of the tag,
+as direct ranges would. And an anchor that surely sees the fix (from it and from all those
+points) hears its direct path: beyond the first :data:`MISSES`, each such anchor whose
+range is longer than its distance by more than :data:`LOOSE` contradicts the fix (a mirror
+image above the racks is seen by every anchor, with echo ranges).
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
 test, so that one echo among them would have shown, and their directions fix the position
@@ -49,6 +61,7 @@ import numba
 import numpy as np
 
 from simulation.least_squares import linear_fix, lm_solve, residuals, scratch
+from simulation.polyhedral import sees_near
 
 #: the quality of a fix (:class:`simulation.positioning.PositionFix` ``quality``)
 NO_FIX, UNVERIFIED, VERIFIED = 0, 1, 2
@@ -67,6 +80,12 @@ LOOSE = (0.2, 5.0)
 #: (m, range σs): a range shorter than the distance by more than the larger of the two
 #: contradicts the position (an echo makes a range longer, never shorter)
 SHORT = (0.1, 3.0)
+#: (m) an anchor hides a position only if it hides every point this close to it along the
+#: axes: a fix is centimetres off, and a direct path may graze an obstacle's edge
+GRAZE = 0.05
+#: the anchors that surely see a position with a range longer than its distance (their
+#: direct path missed) before each further one contradicts it (on a room's map)
+MISSES = 2
 #: the largest normalized residual T of a minimal set taken where no 5 anchors agree: its 4
 #: ranges agree to about 7 cm (anchors are mounted within centimetres of the plan)
 MINIMAL_T = 200.0
@@ -109,10 +128,13 @@ def robust_rows(
     thr,
     used,
     quality,
+    geo,
 ):  # pragma: no cover - compiled
     """Steps 2–4 of the module docstring for every row whose least-squares fix is in xs
     (B, 3), costs (B,), status (B,) (rows with status < 0 have no fix and are left); the
-    anchors kept are written into used (B, M) and the quality into quality (B,)."""
+    anchors kept are written into used (B, M) and the quality into quality (B,); ``geo``
+    the room's map (:func:`simulation.polyhedral.blocking_map`; empty: nothing hides an
+    anchor)."""
     M = R.shape[1]
     work = scratch(M)
     rho, trial = np.empty(M), np.empty(M)
@@ -159,11 +181,12 @@ def robust_rows(
             x[:] = xb
             T, n = best_T, n - 1
             status[b] = best_st
-        if not (T <= thr[n - 3] and n >= 5 and _score(ab, R[b], x, 0.0, short)[1] == 0):  # 4
+        clean = T <= thr[n - 3] and n >= 5
+        if not (clean and _contradictions(ab, R[b], rho, x, short, loose, geo) == 0):
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, thr, loose, short, used[b], work,
-            )  # fmt: skip
+                gtol, sigma, thr, loose, short, used[b], work, geo,
+            )  # fmt: skip  # step 4
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
@@ -172,7 +195,7 @@ def robust_rows(
 
 @numba.njit(cache=True)
 def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-               sigma, thr, loose, short, used, work):  # fmt: skip  # pragma: no cover
+               sigma, thr, loose, short, used, work, geo):  # fmt: skip  # pragma: no cover
     """Step 4 of the module docstring for the ranges rho0 (M,) of anchors ab (M, 3): the
     minimal sets of 4 heard anchors, those of the shortest ranges first, each a hypothesis
     scored by its contradictions and its inliers (:func:`_score`); a promising one is
@@ -181,7 +204,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     metres). On success x (3,) and used (M,) hold the best refined fix and its anchors;
     returns (T, n, iterations)."""
     M = rho0.shape[0]
-    order = np.argsort(np.where(rho0 == rho0, rho0, np.inf))
+    order = np.argsort(_order_key(ab, rho0, short))
     h = 0
     for j in range(M):
         h += rho0[j] == rho0[j]
@@ -203,16 +226,16 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         for k in range(3):
             xt[k] = min(max(xt[k], lo[k]), hi[k])
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
-        if best_in < 5 and nshort <= four_short:  # no set of 5 yet: the minimal set itself
+        if best_in < 5 and nshort <= four_short:  # no clean set of 5 yet: the minimal set
             four_short, four_T, iters = _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short,
                                                  four_T, iters, lo, hi, bounded, poly,
                                                  max_iter, xtol, ftol, gtol, sigma, short,
-                                                 work)  # fmt: skip
+                                                 loose, work, geo)  # fmt: skip
         if inl >= 5 and _better(nshort, inl, best_short, best_in):
             Tk, m, it = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
                                 poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
-            nshort = _score(ab, rho0, xt, 3.0 * sigma, short)[1]
+            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo)
             if m >= 5 and _better(nshort, m, best_short, best_in):
                 best_short, best_in, best_T = nshort, m, Tk
                 best_x[:] = xt
@@ -222,10 +245,16 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
                     break
         if not _next_colex(c, h):
             break
-    if best_in >= 5:
+    if best_in >= 5 and best_short == 0:
         x[:] = best_x
         return best_T, best_in, iters
-    now = _score(ab, rho0, x, 0.0, short)[1]  # the contradictions of the fix so far
+    if best_in >= 5:
+        now, T, n = best_short, best_T, best_in  # a set of 5 that something contradicts
+        x[:] = best_x
+    else:
+        for j in range(M):
+            trial[j] = rho0[j] if used[j] else np.nan
+        now = _contradictions(ab, rho0, trial, x, short, loose, geo)  # those of the fix so far
     if four_short == 0 and four_T <= MINIMAL_T and (now > 0 or four_T < T):
         x[:] = four_x  # no consistent set of 5: a consistent minimal set no range contradicts
         for j in range(M):
@@ -235,8 +264,32 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
 
 
 @numba.njit(cache=True)
+def _order_key(ab, rho0, short):  # pragma: no cover - compiled
+    """(M,) the order of the anchors in the minimal sets: their ranges, those certainly
+    echoes after all the others (inf for the unheard). An echo only lengthens a range, so
+    r_j − r_k − |a_j − a_k| is a lower bound of the excess of range j over its distance
+    for every heard k (the triangle inequality); above ``short`` m, range j is an echo."""
+    M = rho0.shape[0]
+    key = np.full(M, np.inf)
+    top = 0.0
+    for j in range(M):
+        if rho0[j] == rho0[j]:
+            top = max(top, rho0[j])
+    for j in range(M):
+        if rho0[j] != rho0[j]:
+            continue
+        key[j] = rho0[j]
+        for k in range(M):
+            if rho0[k] == rho0[k] and rho0[j] - rho0[k] - _distance(ab[j], ab[k]) > short:
+                key[j] += top + 1.0  # after every range not known to be an echo
+                break
+    return key
+
+
+@numba.njit(cache=True)
 def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, lo, hi, bounded,
-             poly, max_iter, xtol, ftol, gtol, sigma, short, work):  # fmt: skip  # pragma: no cover
+             poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
+             geo):  # fmt: skip  # pragma: no cover
     """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
     squares from xt into the scratch xm (3,); kept in four (M,) and four_x (3,) when it has
     fewer contradictions than the best minimal set so far, or as few and a smaller T;
@@ -245,7 +298,7 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, l
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
-    nshort = _score(ab, rho0, xm, 0.0, short)[1]
+    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo)
     if nshort < four_short or (nshort == four_short and Tm < four_T):
         four[:] = trial
         four_x[:] = xm
@@ -289,6 +342,23 @@ def _score(ab, rho0, x, tol, short) -> tuple[int, int]:  # pragma: no cover - co
             inl += abs(e) <= tol
             nshort += e > short
     return inl, nshort
+
+
+@numba.njit(cache=True)
+def _contradictions(ab, rho0, kept, x, short, long, geo) -> int:  # pragma: no cover
+    """What contradicts the fix x (3,) that rests on the ranges kept (M,) (NaN: not kept):
+    the ranges of rho0 (M,) shorter than their distance by more than ``short`` m, and the
+    kept anchors that do not see x on the map ``geo`` (a range from behind an obstacle is
+    an echo, and echoes off one face agree with each other at a mirror image)."""
+    n = _score(ab, rho0, x, 0.0, short)[1]
+    miss = 0
+    for j in range(ab.shape[0]):
+        if kept[j] == kept[j]:
+            n += not sees_near(geo, x, ab[j], GRAZE, False)
+        elif (geo[0].shape[0] and rho0[j] - _distance(x, ab[j]) > long
+              and sees_near(geo, x, ab[j], GRAZE, True)):  # fmt: skip
+            miss += 1
+    return n + max(miss - MISSES, 0)
 
 
 @numba.njit(cache=True)

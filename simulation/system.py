@@ -105,11 +105,12 @@ class Positioning:
         verified only if they see the anchors they rest on (:mod:`simulation.map_check`)."""
         region = (np.zeros(3), np.asarray(room.size, dtype=float))
         poly = None if (room.is_shoebox or not self.keep_in_room) else room.floor_corners
+        mapped = self.method == "robust" and self.keep_in_room and needs_check(room)
         fix = locate(anchors, ranges, method=self.method, region=region,
                      bounded=self.keep_in_room, floor_plan=poly, max_iter=self.max_iter,
                      range_sigma=self.range_sigma, false_alarm=self.false_alarm,
-                     full_output=full_output)  # fmt: skip
-        if full_output and self.method == "robust" and self.keep_in_room and needs_check(room):
+                     room=room if mapped else None, full_output=full_output)  # fmt: skip
+        if full_output and mapped:
             return _map_checked(room, anchors, fix)  # what it vouches for, on the room's map
         return fix
 

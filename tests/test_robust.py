@@ -306,6 +306,69 @@ def test_a_consistent_set_the_fix_cannot_see_is_not_verified():
     assert not fix.verified.any() and fix.quality[0] == UNVERIFIED
 
 
+@pytest.mark.parametrize(
+    ("tag", "mirror"),
+    [((3.5, 5.0, 1.2), (1.5, 4.5, 1.2)), ((3.0, 6.0, 1.2), (1.0, 5.5, 1.2)),
+     ((3.8, 3.0, 1.0), (2.0, 3.0, 2.0))],
+)  # fmt: skip
+def test_echoes_that_agree_at_a_point_hidden_from_their_anchors_are_rejected(tag, mirror):
+    from simulation.polyhedral import line_of_sight
+
+    # the west anchors see the tag (direct ranges); the east ones are hidden from it and
+    # their echoes agree at a point that none of them sees, not farther from the west
+    # anchors than the tag: no range contradicts either point
+    tag, mirror = np.array(tag), np.array(mirror)
+    anchors = np.concatenate([WEST, EAST])
+    assert line_of_sight(RACK_ROOM, WEST, tag[None]).all()
+    assert not line_of_sight(RACK_ROOM, EAST, tag[None]).any()
+    assert not line_of_sight(RACK_ROOM, EAST, mirror[None]).any()
+    echoes = np.linalg.norm(EAST - mirror, axis=1)
+    assert np.all(echoes > np.linalg.norm(EAST - tag, axis=1) + 0.3)
+    direct = np.linalg.norm(WEST - tag, axis=1)
+    assert np.all(np.linalg.norm(WEST - mirror, axis=1) < direct + 0.05)
+    ranges = np.concatenate([direct, echoes])[None]
+    box = (np.zeros(3), np.array(RACK_ROOM.size))
+    blind = locate(anchors, ranges, method="robust", range_sigma=0.01, region=box, bounded=True,
+                   full_output=True)  # fmt: skip
+    assert np.linalg.norm(blind.x[0] - tag) > 0.5  # without the map the mirror wins
+    fix = locate(anchors, ranges, method="robust", range_sigma=0.01, region=box, bounded=True,
+                 room=RACK_ROOM, full_output=True)  # fmt: skip
+    assert np.linalg.norm(fix.x[0] - tag) < 1e-3 and fix.quality[0] == VERIFIED
+    assert fix.used[0].tolist() == [True] * 5 + [False] * 6
+    same = MAPPED.locate(RACK_ROOM, anchors, ranges, full_output=True)
+    np.testing.assert_allclose(same.x, fix.x, atol=1e-9)
+
+
+def test_a_position_grazing_an_edge_sees_the_anchor_beyond_it():
+    from simulation.polyhedral import blocking_map, sees, sees_near
+
+    geo = blocking_map(RACK_ROOM)
+    anchor = np.array([9.97, 0.5, 1.0])  # the segment from (3, y, 1) clears the rack's
+    # south-west edge (4, 1) for y below 1.0838
+    cases = ((1.0, True, True, True), (1.05, True, True, False), (1.10, False, True, False),
+             (1.3, False, False, False))  # fmt: skip
+    for y, seen, near, surely in cases:
+        p = np.array([3.0, y, 1.0])
+        assert sees(geo, p, anchor) == seen
+        assert sees_near(geo, p, anchor, 0.05, False) == near  # from one point 5 cm away
+        assert sees_near(geo, p, anchor, 0.05, True) == surely  # from all of them
+    empty = blocking_map(Room(size=(4.0, 4.0, 3.0)))
+    assert empty[0].size == 0 and sees(empty, np.zeros(3), np.ones(3))
+
+
+def test_a_range_longer_than_another_by_more_than_their_anchors_distance_is_tried_last():
+    from simulation.robust import _order_key
+
+    anchors = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    ranges = np.array([2.0, 1.5, 3.1, np.nan])  # 3.1 − 2.0 > |a2 − a0| = 1: an echo
+    key = _order_key(anchors, ranges, 0.1)
+    assert np.argsort(key).tolist() == [1, 0, 2, 3] and key[3] == np.inf
+    ranges[2] = 2.9  # 2.9 − 1.5 < |a2 − a1| = √2: no proof; ranked by its range
+    assert np.argsort(_order_key(anchors, ranges, 0.1)).tolist() == [1, 0, 2, 3]
+    ranges[2] = 1.8
+    assert np.argsort(_order_key(anchors, ranges, 0.1)).tolist() == [1, 2, 0, 3]
+
+
 def test_the_map_check_vouches_only_for_fixes_that_see_their_anchors():
     from simulation.map_check import map_check
 
