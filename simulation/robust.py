@@ -29,9 +29,10 @@ schemes (Casas et al., 2006):
    so far is refined by least squares on its inliers, then on those within 3σ of the
    refined fix; the first refined set of 5 or more that passes the test with no
    contradiction ends the search (at most :data:`HYPOTHESES` minimal sets), else the best
-   one is kept; where no 5 anchors agree without a contradiction, the minimal set that
-   nothing contradicts and whose 4 ranges agree (T at most :data:`MINIMAL_T`; the
-   smallest T) is the fix when the fix so far has a contradiction or a larger T;
+   one is kept; where no 5 anchors agree without a contradiction, the least contradicted
+   minimal set whose 4 ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is
+   the fix when it is less contradicted than the fix so far, or as little and with a
+   smaller T;
 5. the fix is the least-squares position on the anchors kept.
 
 A fix's contradictions are its ranges shorter than their distance by more than
@@ -43,7 +44,9 @@ on an echo: the echoes off one face agree with each other at the mirror image of
 as direct ranges would. And an anchor that surely sees the fix (from it and from all those
 points) hears its direct path: beyond the first :data:`MISSES`, each such anchor whose
 range is longer than its distance by more than :data:`LOOSE` contradicts the fix (a mirror
-image above the racks is seen by every anchor, with echo ranges).
+image above the racks is seen by every anchor, with echo ranges). A short range outweighs
+any number of what the map says (:func:`_contradictions`): it is physics, the map may be
+coarse.
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
 test, so that one echo among them would have shown, and their directions fix the position
@@ -89,6 +92,8 @@ MISSES = 2
 #: the largest normalized residual T of a minimal set taken where no 5 anchors agree: its 4
 #: ranges agree to about 7 cm (anchors are mounted within centimetres of the plan)
 MINIMAL_T = 200.0
+#: a bound no count of contradictions reaches
+INFINITE = 1 << 30
 #: the largest position dilution of precision of the anchors of a verified fix: 5 nearly
 #: collinear anchors agree with each other at many positions
 DOP_MAX = 10.0
@@ -182,7 +187,7 @@ def robust_rows(
             T, n = best_T, n - 1
             status[b] = best_st
         clean = T <= thr[n - 3] and n >= 5
-        if not (clean and _contradictions(ab, R[b], rho, x, short, loose, geo) == 0):
+        if not (clean and _contradictions(ab, R[b], rho, x, short, loose, geo, 0) == 0):
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
                 gtol, sigma, thr, loose, short, used[b], work, geo,
@@ -212,9 +217,9 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         return T, n, iters
     c = np.arange(4)
     trial, xt, xm, best_x = np.empty(M), np.empty(3), np.empty(3), np.empty(3)
-    best_short, best_in, best_T = M + 1, 0, T
+    best_short, best_in, best_T = INFINITE, 0, T
     four = np.empty(M)  # the best minimal set's fix, contradictions, T and ranges
-    four_x, four_short, four_T = np.empty(3), M + 1, math.inf
+    four_x, four_short, four_T = np.empty(3), INFINITE, math.inf
     for _ in range(HYPOTHESES):
         trial[:] = np.nan
         for i in range(4):
@@ -226,7 +231,8 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         for k in range(3):
             xt[k] = min(max(xt[k], lo[k]), hi[k])
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
-        if best_in < 5 and nshort <= four_short:  # no clean set of 5 yet: the minimal set
+        nshort *= M + 1  # as _contradictions counts them
+        if best_in < 5 and nshort <= four_short:  # no set of 5 yet: the minimal set itself
             four_short, four_T, iters = _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short,
                                                  four_T, iters, lo, hi, bounded, poly,
                                                  max_iter, xtol, ftol, gtol, sigma, short,
@@ -235,7 +241,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             Tk, m, it = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
                                 poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
-            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo)
+            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, best_short)
             if m >= 5 and _better(nshort, m, best_short, best_in):
                 best_short, best_in, best_T = nshort, m, Tk
                 best_x[:] = xt
@@ -254,9 +260,9 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     else:
         for j in range(M):
             trial[j] = rho0[j] if used[j] else np.nan
-        now = _contradictions(ab, rho0, trial, x, short, loose, geo)  # those of the fix so far
-    if four_short == 0 and four_T <= MINIMAL_T and (now > 0 or four_T < T):
-        x[:] = four_x  # no consistent set of 5: a consistent minimal set no range contradicts
+        now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)  # the fix so far
+    if four_T <= MINIMAL_T and (four_short < now or (four_short == now == 0 and four_T < T)):
+        x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
         for j in range(M):
             used[j] = four[j] == four[j]
         return four_T, 4, iters
@@ -298,7 +304,7 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, l
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
-    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo)
+    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo, four_short)
     if nshort < four_short or (nshort == four_short and Tm < four_T):
         four[:] = trial
         four_x[:] = xm
@@ -345,19 +351,29 @@ def _score(ab, rho0, x, tol, short) -> tuple[int, int]:  # pragma: no cover - co
 
 
 @numba.njit(cache=True)
-def _contradictions(ab, rho0, kept, x, short, long, geo) -> int:  # pragma: no cover
-    """What contradicts the fix x (3,) that rests on the ranges kept (M,) (NaN: not kept):
-    the ranges of rho0 (M,) shorter than their distance by more than ``short`` m, and the
-    kept anchors that do not see x on the map ``geo`` (a range from behind an obstacle is
-    an echo, and echoes off one face agree with each other at a mirror image)."""
-    n = _score(ab, rho0, x, 0.0, short)[1]
+def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragma: no cover
+    """How much contradicts the fix x (3,) that rests on the ranges kept (M,) (NaN: not
+    kept; module docstring): each range of rho0 (M,) shorter than its distance by more
+    than ``short`` m counts M + 1 (no path is shorter than the direct one: it outweighs
+    whatever the map says), and on the map ``geo`` each kept anchor that does not see x
+    and each anchor beyond the first :data:`MISSES` that surely sees x with a range longer
+    than its distance by more than ``long`` m counts 1. Counting stops above ``bound``."""
+    M = ab.shape[0]
+    n = _score(ab, rho0, x, 0.0, short)[1] * (M + 1)
+    if n > bound or geo[0].shape[0] == 0:
+        return n
+    for j in range(M):
+        if kept[j] == kept[j] and not sees_near(geo, x, ab[j], GRAZE, False):
+            n += 1
+            if n > bound:
+                return n
     miss = 0
-    for j in range(ab.shape[0]):
-        if kept[j] == kept[j]:
-            n += not sees_near(geo, x, ab[j], GRAZE, False)
-        elif (geo[0].shape[0] and rho0[j] - _distance(x, ab[j]) > long
-              and sees_near(geo, x, ab[j], GRAZE, True)):  # fmt: skip
+    for j in range(M):
+        if (kept[j] != kept[j] and rho0[j] - _distance(x, ab[j]) > long
+                and sees_near(geo, x, ab[j], GRAZE, True)):  # fmt: skip
             miss += 1
+            if n + miss - MISSES > bound:
+                break
     return n + max(miss - MISSES, 0)
 
 
