@@ -210,6 +210,7 @@ def locate(
     flags = {"bounded": bounded, "full_output": full_output}
     a, rho, max_iter = _check_input(anchors, ranges, max_iter, tols, flags)
     poly = _check_method(method, floor_plan, range_sigma, false_alarm)
+    room_map = _room_map(room)
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
@@ -228,7 +229,7 @@ def locate(
     if method == "robust":
         used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
                                 poly, int(max_iter), tols, range_sigma, false_alarm,
-                                None if room is None else blocking_map(room))  # fmt: skip
+                                room_map)  # fmt: skip
     converged = status > 0
     if not np.all(converged):
         n = int(np.sum(~converged))
@@ -445,6 +446,15 @@ def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, fals
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
                     thresholds(false_alarm, M), used, quality, geo)  # fmt: skip
     return used, quality
+
+
+def _room_map(room):
+    """The map of ``room`` for the robust search (None without a room)."""
+    if room is None:
+        return None
+    if not all(hasattr(room, k) for k in ("obstacles", "is_convex", "floor_corners")):
+        raise ValueError(f"room: expected a simulation.Room or None, got {checks.describe(room)}")
+    return blocking_map(room)
 
 
 def _floor_plan(floor_plan) -> np.ndarray:

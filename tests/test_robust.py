@@ -339,6 +339,12 @@ def test_echoes_that_agree_at_a_point_hidden_from_their_anchors_are_rejected(tag
     np.testing.assert_allclose(same.x, fix.x, atol=1e-9)
 
 
+def test_a_room_that_is_not_a_room_is_refused_by_name():
+    ranges = np.linalg.norm(WEST - np.array([3.0, 5.0, 1.2]), axis=1)[None]
+    with pytest.raises(ValueError, match="room: expected a simulation.Room"):
+        locate(WEST, ranges, method="robust", room="rack")
+
+
 def test_a_position_grazing_an_edge_sees_the_anchor_beyond_it():
     from simulation.polyhedral import blocking_map, sees, sees_near
 
