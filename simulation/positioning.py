@@ -209,8 +209,7 @@ def locate(
     tols = (xtol, ftol, gtol)
     flags = {"bounded": bounded, "full_output": full_output}
     a, rho, max_iter = _check_input(anchors, ranges, max_iter, tols, flags)
-    poly = _check_method(method, floor_plan, range_sigma, false_alarm)
-    room_map = _room_map(room)
+    poly, room_map = _check_method(method, floor_plan, range_sigma, false_alarm, room)
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
@@ -230,24 +229,31 @@ def locate(
         used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
                                 poly, int(max_iter), tols, range_sigma, false_alarm,
                                 room_map)  # fmt: skip
-    converged = status > 0
-    if not np.all(converged):
-        n = int(np.sum(~converged))
-        logger.debug("locate: %d of %d nodes not converged (max_iter=%d)", n, len(R), max_iter)
+    converged = _converged(status, max_iter)
     if not full_output:
         return x.reshape(*lead, 3)
     return _position_fix(lead, x, converged, status, nit, cost, start, used, quality)
 
 
-def _check_method(method, floor_plan, range_sigma, false_alarm):
+def _converged(status: np.ndarray, max_iter: int) -> np.ndarray:
+    """(N,) whether each node converged (status > 0); the others logged at DEBUG."""
+    converged = status > 0
+    if not np.all(converged):
+        n = int(np.sum(~converged))
+        logger.debug("locate: %d of %d nodes not converged (max_iter=%d)", n, len(status),
+                     max_iter)  # fmt: skip
+    return converged
+
+
+def _check_method(method, floor_plan, range_sigma, false_alarm, room):
     """The checked ``method`` and its settings (:func:`locate`); returns the floor plan
-    (K, 2) or None."""
+    (K, 2) or None, and the map of ``room`` (:func:`_room_map`)."""
     checks.choice("method", method, METHODS)
     poly = _floor_plan(floor_plan)
     if method == "robust":
         checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
         checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
-    return poly
+    return poly, _room_map(room)
 
 
 def _position_fix(lead, x, converged, status, nit, cost, start, used, quality) -> PositionFix:
@@ -434,24 +440,23 @@ def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, fals
             room_map):  # fmt: skip
     """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
     fixes (:mod:`simulation.robust`) on the map ``room_map``
-    (:func:`simulation.polyhedral.blocking_map`; None: nothing hides an anchor); returns
-    the anchors used (B, M) and the qualities."""
+    (:func:`simulation.polyhedral.blocking_map`); returns the anchors used (B, M) and the
+    qualities."""
     B, M = R.shape
-    geo = room_map if room_map is not None else NO_MAP
     used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
     if B:
         x, cost, status, nit = fix
         robust_rows(_c(a), _c(owner, np.int64), _c(R), x, cost, status, nit,
                     _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
-                    thresholds(false_alarm, M), used, quality, geo)  # fmt: skip
+                    thresholds(false_alarm, M), used, quality, room_map)  # fmt: skip
     return used, quality
 
 
 def _room_map(room):
-    """The map of ``room`` for the robust search (None without a room)."""
+    """The map of ``room`` for the robust search (an empty map without a room)."""
     if room is None:
-        return None
+        return NO_MAP
     if not all(hasattr(room, k) for k in ("obstacles", "is_convex", "floor_corners")):
         raise ValueError(f"room: expected a simulation.Room or None, got {checks.describe(room)}")
     return blocking_map(room)

@@ -162,23 +162,11 @@ def robust_rows(
         T = 2.0 * costs[b] / (sigma * sigma)
         iters = nit[b]
         while T > thr[n - 3] and n > 4:
-            _deleted_residuals(x, ab, rho, score, work[0], work[1])
-            best_T, best_j, best_st = math.inf, -1, 0
-            for _ in range(CANDIDATES):
-                j = _argmax_finite(score)
-                if j < 0:
-                    break
-                score[j] = -math.inf
-                trial[:] = rho
-                trial[j] = np.nan
-                xt[:] = x
-                c, st, it = lm_solve(ab, trial, xt, lo[b], hi[b], bounded, poly, drop_iter,
-                                     xtol, ftol, gtol, *work)  # fmt: skip
-                iters += it
-                Tj = 2.0 * c / (sigma * sigma)
-                if Tj < best_T:
-                    best_T, best_j, best_st = Tj, j, st
-                    xb[:] = xt
+            best_T, best_j, best_st, it = _drop_one(
+                ab, rho, x, score, trial, xt, xb, lo[b], hi[b], bounded, poly, drop_iter, xtol,
+                ftol, gtol, sigma, work,
+            )  # fmt: skip
+            iters += it
             if best_j < 0:
                 break
             rho[best_j] = np.nan
@@ -196,6 +184,33 @@ def robust_rows(
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
         quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, rho, work)
+
+
+@numba.njit(cache=True)
+def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+              sigma, work):  # fmt: skip  # pragma: no cover - compiled
+    """Step 3 of the module docstring once, from the fix x (3,) on the ranges rho (M,): the
+    :data:`CANDIDATES` anchors of the largest deleted residuals each left out and solved
+    again (``score``, ``trial``, ``xt``: scratch); returns (T, anchor, status, iterations)
+    of the best, its fix in xb (3,) (anchor −1: none to leave out)."""
+    _deleted_residuals(x, ab, rho, score, work[0], work[1])
+    best_T, best_j, best_st, iters = math.inf, -1, 0, 0
+    for _ in range(CANDIDATES):
+        j = _argmax_finite(score)
+        if j < 0:
+            break
+        score[j] = -math.inf
+        trial[:] = rho
+        trial[j] = np.nan
+        xt[:] = x
+        c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+                             *work)  # fmt: skip
+        iters += it
+        Tj = 2.0 * c / (sigma * sigma)
+        if Tj < best_T:
+            best_T, best_j, best_st = Tj, j, st
+            xb[:] = xt
+    return best_T, best_j, best_st, iters
 
 
 @numba.njit(cache=True)
