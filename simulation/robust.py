@@ -217,19 +217,20 @@ def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter,
 def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                sigma, thr, loose, short, used, work, geo):  # fmt: skip  # pragma: no cover
     """Step 4 of the module docstring for the ranges rho0 (M,) of anchors ab (M, 3): the
-    minimal sets of 4 heard anchors, those of the shortest ranges first, each a hypothesis
-    scored by its contradictions and its inliers (:func:`_score`); a promising one is
-    refined (:func:`_refine`), and the first refined set that passes the test with no
-    contradiction ends the search (``loose``, ``short``: :data:`LOOSE`, :data:`SHORT` in
-    metres). On success x (3,) and used (M,) hold the best refined fix and its anchors;
+    minimal sets of 4 heard anchors in the order of :func:`_order_key`, each a hypothesis
+    scored by its short ranges and its inliers (:func:`_score`); a promising one is refined
+    (:func:`_refine`) and checked on the map ``geo`` (:func:`_contradictions`), and the
+    first refined set that passes the test with no contradiction ends the search
+    (``loose``, ``short``: :data:`LOOSE`, :data:`SHORT` in metres). On success x (3,) and
+    used (M,) hold the best refined fix and its anchors;
     returns (T, n, iterations)."""
     M = rho0.shape[0]
-    order = np.argsort(_order_key(ab, rho0, short))
     h = 0
     for j in range(M):
         h += rho0[j] == rho0[j]
     if h < 5:
         return T, n, iters
+    order = np.argsort(_order_key(ab, rho0, short))
     c = np.arange(4)
     trial, xt, xm, best_x = np.empty(M), np.empty(3), np.empty(3), np.empty(3)
     best_short, best_in, best_T = INFINITE, 0, T
