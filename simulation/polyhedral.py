@@ -387,13 +387,26 @@ NO_MAP = (np.empty(0, dtype=np.int64), np.empty((0, 3)), np.empty(0), np.empty((
           np.empty(0, dtype=bool), np.empty((0, 2)))  # fmt: skip
 
 
+#: the last room :func:`blocking_map` mapped and its map: a plan locates thousands of
+#: batches in one room, and a room (frozen) does not change
+_LAST_MAP: tuple = (None, NO_MAP)
+
+
 def blocking_map(room) -> tuple:
     """The room's map of what can block a straight path, for :func:`sees`: (kind, normal,
     d, box, blocking, plan) of its blocking reflectors (walls of a non-convex floor plan,
     obstacle faces); empty arrays where nothing can block (a convex room without
-    obstacles)."""
-    if room.is_convex and not room.obstacles:
-        return NO_MAP
+    obstacles). The arrays are shared between calls for the same room: read them only."""
+    global _LAST_MAP
+    last, geo = _LAST_MAP  # one read: another thread may replace the pair
+    if last is room:
+        return geo
+    geo = NO_MAP if room.is_convex and not room.obstacles else _map(room)
+    _LAST_MAP = (room, geo)
+    return geo
+
+
+def _map(room) -> tuple:
     refl = reflectors(room)
     keep = refl.blocking
     return (np.ascontiguousarray(refl.kind[keep]), np.ascontiguousarray(refl.normal[keep]),

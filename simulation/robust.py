@@ -28,8 +28,9 @@ schemes (Casas et al., 2006):
    :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one better than the best
    so far is refined by least squares on its inliers, then on those within 3σ of the
    refined fix; the first refined set of 5 or more that passes the test with no
-   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets), else the best
-   one is kept; where no 5 anchors agree without a contradiction, the least contradicted
+   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, and up to
+   :data:`MORE_HYPOTHESES` while every set so far is contradicted: in a hall of racks the
+   few direct ranges may be among the longest), else the best one is kept; where no 5 anchors agree without a contradiction, the least contradicted
    minimal set whose 4 ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is
    the fix when it is less contradicted than the fix so far, or as little and with a
    smaller T;
@@ -77,6 +78,9 @@ QUALITY = {
 CANDIDATES = 2
 #: the most minimal sets (4 anchors) step 4 tries for one fix (8 anchors: all 70)
 HYPOTHESES = 300
+#: the most minimal sets step 4 tries for a fix that every set so far contradicts: in a
+#: hall of racks 4 or 5 of 18 heard anchors may see the tag, and their sets come late
+MORE_HYPOTHESES = 3000
 #: (m, range σs): a range within the larger of the two of a hypothesis' distance is its
 #: inlier before refinement (a minimal set's fix is only roughly right)
 LOOSE = (0.2, 5.0)
@@ -236,7 +240,9 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     best_short, best_in, best_T = INFINITE, 0, T
     four = np.empty(M)  # the best minimal set's fix, contradictions, T and ranges
     four_x, four_short, four_T = np.empty(3), INFINITE, math.inf
-    for _ in range(HYPOTHESES):
+    for t in range(MORE_HYPOTHESES):
+        if t >= HYPOTHESES and (best_short == 0 or (four_short == 0 and four_T <= MINIMAL_T)):
+            break  # something uncontradicted: search no further
         trial[:] = np.nan
         for i in range(4):
             trial[order[c[i]]] = rho0[order[c[i]]]
@@ -248,7 +254,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             xt[k] = min(max(xt[k], lo[k]), hi[k])
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         nshort *= M + 1  # as _contradictions counts them
-        if best_in < 5 and nshort <= four_short:  # no set of 5 yet: the minimal set itself
+        if best_short > 0 and nshort <= four_short:  # no uncontradicted set of 5 yet
             four_short, four_T, iters = _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short,
                                                  four_T, iters, lo, hi, bounded, poly,
                                                  max_iter, xtol, ftol, gtol, sigma, short,
