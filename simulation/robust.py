@@ -30,10 +30,10 @@ schemes (Casas et al., 2006):
    refined fix; the first refined set of 5 or more that passes the test with no
    contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, and up to
    :data:`MORE_HYPOTHESES` while every set so far is contradicted: in a hall of racks the
-   few direct ranges may be among the longest), else the best one is kept; where no 5 anchors agree without a contradiction, the least contradicted
-   minimal set whose 4 ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is
-   the fix when it is less contradicted than the fix so far, or as little and with a
-   smaller T;
+   few direct ranges may be among the longest), else the best one is kept; where no 5
+   anchors agree without a contradiction, the least contradicted minimal set whose 4
+   ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is the fix when it is
+   less contradicted than the fix so far, or as little and with a smaller T;
 5. the fix is the least-squares position on the anchors kept.
 
 A fix's contradictions are its ranges shorter than their distance by more than
