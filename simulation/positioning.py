@@ -247,13 +247,16 @@ def _converged(status: np.ndarray, max_iter: int) -> np.ndarray:
 
 def _check_method(method, floor_plan, range_sigma, false_alarm, room):
     """The checked ``method`` and its settings (:func:`locate`); returns the floor plan
-    (K, 2) or None, and the map of ``room`` (:func:`_room_map`)."""
+    (K, 2) or None, and the map of ``room`` (:func:`_room_map`; empty for least squares,
+    which does not use it)."""
     checks.choice("method", method, METHODS)
     poly = _floor_plan(floor_plan)
+    _check_room(room)
     if method == "robust":
         checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
         checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
-    return poly, _room_map(room)
+        return poly, _room_map(room)
+    return poly, NO_MAP
 
 
 def _position_fix(lead, x, converged, status, nit, cost, start, used, quality) -> PositionFix:
@@ -453,13 +456,17 @@ def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, fals
     return used, quality
 
 
+def _check_room(room) -> None:
+    """A room (or None) is what ``room=`` takes: refused by name before any solve."""
+    if room is not None and not all(
+        hasattr(room, k) for k in ("obstacles", "is_convex", "floor_corners")
+    ):
+        raise ValueError(f"room: expected a simulation.Room or None, got {checks.describe(room)}")
+
+
 def _room_map(room):
     """The map of ``room`` for the robust search (an empty map without a room)."""
-    if room is None:
-        return NO_MAP
-    if not all(hasattr(room, k) for k in ("obstacles", "is_convex", "floor_corners")):
-        raise ValueError(f"room: expected a simulation.Room or None, got {checks.describe(room)}")
-    return blocking_map(room)
+    return NO_MAP if room is None else blocking_map(room)
 
 
 def _floor_plan(floor_plan) -> np.ndarray:
