@@ -36,7 +36,14 @@ import numpy as np
 from simulation import checks, degeneracy
 from simulation.least_squares import linear_fix, lm_rows
 from simulation.polyhedral import NO_MAP, blocking_map
-from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, robust_rows, thresholds
+from simulation.robust import (
+    NO_FIX,
+    UNVERIFIED,
+    VERIFIED,
+    bias_scales,
+    robust_rows,
+    thresholds,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -61,7 +68,7 @@ MIN_HEARD = 4
 METHODS = ("ls", "robust")
 #: the robust method's defaults: the receiver's range σ (m) and the false-alarm
 #: probability of its consistency test
-RANGE_SIGMA, FALSE_ALARM = 0.01, 1e-3
+RANGE_SIGMA, FALSE_ALARM, ALERT_LIMIT = 0.01, 1e-3, 0.5
 
 
 @dataclass(frozen=True)
@@ -171,6 +178,7 @@ def locate(
     gtol: float = 1e-12,
     range_sigma: float = RANGE_SIGMA,
     false_alarm: float = FALSE_ALARM,
+    alert_limit: float = ALERT_LIMIT,
     room=None,
     full_output: bool = False,
 ):
@@ -183,7 +191,9 @@ def locate(
     ----------
     method : ``"ls"``, least squares on every heard range (the paper's), or ``"robust"``,
         least squares on the anchors consistent to ``range_sigma`` (m) at the
-        false-alarm probability ``false_alarm`` of the χ² test (:mod:`simulation.robust`).
+        false-alarm probability ``false_alarm`` of the χ² test (:mod:`simulation.robust`);
+        a robust fix is verified only if one echo the test misses cannot move it by more
+        than ``alert_limit`` (m; its protection level, :mod:`simulation.robust`).
     region : (lo (3,), hi (3,)) box the nodes are known to be in (e.g. ``(0, room.size)``);
         sets the start (box centre, or the linear solution when inside) and the bounds.
         Default: the anchors' bounding box.
@@ -209,7 +219,8 @@ def locate(
     tols = (xtol, ftol, gtol)
     flags = {"bounded": bounded, "full_output": full_output}
     a, rho, max_iter = _check_input(anchors, ranges, max_iter, tols, flags)
-    poly, room_map = _check_method(method, floor_plan, range_sigma, false_alarm, room)
+    poly, room_map = _check_method(method, floor_plan, (range_sigma, false_alarm, alert_limit),
+                                   room)  # fmt: skip
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
@@ -227,7 +238,7 @@ def locate(
     used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
     if method == "robust":
         used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
-                                poly, int(max_iter), tols, range_sigma, false_alarm,
+                                poly, int(max_iter), tols, (range_sigma, false_alarm, alert_limit),
                                 room_map)  # fmt: skip
     converged = _converged(status, max_iter)
     if not full_output:
@@ -245,16 +256,16 @@ def _converged(status: np.ndarray, max_iter: int) -> np.ndarray:
     return converged
 
 
-def _check_method(method, floor_plan, range_sigma, false_alarm, room):
-    """The checked ``method`` and its settings (:func:`locate`); returns the floor plan
+def _check_method(method, floor_plan, test, room):
+    """The checked ``method`` and its settings (:func:`locate`; ``test`` the robust
+    method's (range_sigma, false_alarm, alert_limit)); returns the floor plan
     (K, 2) or None, and the map of ``room`` (:func:`_room_map`; empty for least squares,
     which does not use it)."""
     checks.choice("method", method, METHODS)
     poly = _floor_plan(floor_plan)
     _check_room(room)
     if method == "robust":
-        checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
-        checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
+        _check_test(*test)
         return poly, _room_map(room)
     return poly, NO_MAP
 
@@ -439,20 +450,29 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols, poly=N
     return out
 
 
-def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, sigma, false_alarm,
-            room_map):  # fmt: skip
+def _check_test(range_sigma, false_alarm, alert_limit) -> None:
+    """The robust method's test settings (:func:`locate`), refused by name."""
+    checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
+    checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
+    checks.real("alert_limit", alert_limit, low=0.0, high=100.0, low_open=True, unit="m")
+
+
+def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_map):
     """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
-    fixes (:mod:`simulation.robust`) on the map ``room_map``
+    fixes (:mod:`simulation.robust`) with the test ``test`` (range_sigma, false_alarm,
+    alert_limit) on the map ``room_map``
     (:func:`simulation.polyhedral.blocking_map`); returns the anchors used (B, M) and the
     qualities."""
     B, M = R.shape
+    sigma, false_alarm, alert_limit = (float(v) for v in test)
     used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
     if B:
         x, cost, status, nit = fix
         robust_rows(_c(a), _c(owner, np.int64), _c(R), x, cost, status, nit,
                     _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
-                    thresholds(false_alarm, M), used, quality, room_map)  # fmt: skip
+                    thresholds(false_alarm, M), bias_scales(false_alarm, M), alert_limit, used,
+                    quality, room_map)  # fmt: skip
     return used, quality
 
 

@@ -50,15 +50,24 @@ any number of what the map says (:func:`_contradictions`): it is physics, the ma
 coarse.
 
 Every fix gets a quality: **verified** (:data:`VERIFIED`) when 5 or more anchors pass the
-test, so that one echo among them would have shown, and their directions fix the position
+test, so that one echo among them would have shown, their directions fix the position
 (dilution of precision at most :data:`DOP_MAX`: five collinear anchors agree with each
-other on a whole circle); **unverified** (:data:`UNVERIFIED`)
-when only 4 remain (no redundancy to tell an echo) or no subset passes; **no fix**
-(:data:`NO_FIX`) with fewer than 4 heard anchors.
+other on a whole circle), and its protection level is within the alert limit: the largest
+move of the fix that one echo the test misses (with probability :data:`MISSED_DETECTION`)
+can cause, as receiver integrity monitoring bounds it (the slope method of Brown and Chin,
+1998): an echo of excess b on anchor j raises T by b²(1 − h_jj)/σ² and moves the fix by
+b‖k_j‖, k_j the column j of (UᵀU)⁻¹Uᵀ, so the protection level is
+σ √λ max_j ‖k_j‖/√(1 − h_jj), λ the non-centrality the test misses (:func:`bias_scales`).
+With a range σ of centimetres that is centimetres where 5 anchors surround the tag; with
+the decimetres of a peak-pick receiver, metres: its fixes cannot be vouched for.
+**Unverified** (:data:`UNVERIFIED`) when only 4 remain (no redundancy to tell an echo), no
+subset passes, or the bound is not met; **no fix** (:data:`NO_FIX`) with fewer than 4
+heard anchors.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numba
@@ -71,8 +80,10 @@ from simulation.polyhedral import sees_near
 NO_FIX, UNVERIFIED, VERIFIED = 0, 1, 2
 QUALITY = {
     NO_FIX: "no fix: fewer than 4 anchors heard",
-    UNVERIFIED: "unverified: 4 consistent anchors (no redundancy), or none consistent",
-    VERIFIED: "verified: 5 or more anchors consistent to the range sigma",
+    UNVERIFIED: "unverified: 4 consistent anchors (no redundancy), none consistent, or an "
+    "echo the test misses could move the fix beyond the alert limit",
+    VERIFIED: "verified: 5 or more anchors consistent to the range sigma, the fix within "
+    "the alert limit of any echo the test misses",
 }
 #: anchors left out and solved again per dropping step (the largest deleted residuals)
 CANDIDATES = 2
@@ -101,6 +112,9 @@ INFINITE = 1 << 30
 #: the largest position dilution of precision of the anchors of a verified fix: 5 nearly
 #: collinear anchors agree with each other at many positions
 DOP_MAX = 10.0
+#: the probability that the test misses the echo whose move of the fix is the protection
+#: level of a verified fix (its missed-detection probability)
+MISSED_DETECTION = 1e-3
 #: det(S) ≤ COPLANAR · tr(S)³ of the linear normal equations S: the subset's anchors are
 #: (nearly) coplanar and its linear solution is not used
 COPLANAR = 1e-12
@@ -114,6 +128,25 @@ def thresholds(false_alarm: float, M: int) -> np.ndarray:
     from scipy.stats import chi2
 
     return np.concatenate([[0.0], chi2.isf(false_alarm, np.arange(1, M + 1))])
+
+
+@functools.lru_cache(maxsize=64)
+def bias_scales(false_alarm: float, M: int) -> np.ndarray:
+    """(M + 1,) √λ[k] (s[0] = 0): the non-centrality λ[k] of a χ²_k that the test at
+    ``false_alarm`` (:func:`thresholds`) misses with probability :data:`MISSED_DETECTION`;
+    an echo on anchor j passes unseen that often while its excess is below
+    σ √λ[k] / √(1 − h_jj) (module docstring). Read-only (cached)."""
+    from scipy.optimize import brentq
+    from scipy.stats import ncx2
+
+    q = thresholds(false_alarm, M)
+    s = np.zeros(M + 1)
+    for k in range(1, M + 1):
+        # the cdf at the threshold falls from 1 − α (λ → 0) to 0 as λ grows
+        s[k] = math.sqrt(brentq(lambda lam, k=k: ncx2.cdf(q[k], k, lam) - MISSED_DETECTION,
+                                1e-9, 1e4))  # fmt: skip
+    s.flags.writeable = False
+    return s
 
 
 @numba.njit(cache=True)
@@ -135,13 +168,16 @@ def robust_rows(
     gtol,
     sigma,
     thr,
+    bias,
+    alert,
     used,
     quality,
     geo,
 ):  # pragma: no cover - compiled
     """Steps 2–4 of the module docstring for every row whose least-squares fix is in xs
     (B, 3), costs (B,), status (B,) (rows with status < 0 have no fix and are left); the
-    anchors kept are written into used (B, M) and the quality into quality (B,); ``geo``
+    anchors kept are written into used (B, M) and the quality into quality (B,) (``bias``
+    (M + 1,) :func:`bias_scales`, ``alert`` the alert limit in m); ``geo``
     the room's map (:func:`simulation.polyhedral.blocking_map`; empty: nothing hides an
     anchor)."""
     M = R.shape[1]
@@ -187,7 +223,8 @@ def robust_rows(
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
-        quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, rho, work)
+        quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, sigma * bias[n - 3], alert,
+                              rho, work)  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -434,15 +471,43 @@ def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _quality(ab, rho0, used, x, T, n, thr, rho, work) -> int:  # pragma: no cover - compiled
+def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pragma: no cover
     """:data:`VERIFIED` when the n anchors ``used`` (M,) pass the test (T ≤ thr[n − 3],
-    n ≥ 5) and fix x (3,) (:func:`_dop` ≤ :data:`DOP_MAX`), else :data:`UNVERIFIED`; rho
-    (M,) is scratch."""
+    n ≥ 5), fix x (3,) (:func:`_dop` ≤ :data:`DOP_MAX`) and keep the echo the test misses
+    within ``alert`` m (:func:`_largest_slope` times ``bias`` = σ √λ, m), else
+    :data:`UNVERIFIED`; rho (M,) is scratch."""
     if not (T <= thr[n - 3] and n >= 5):
         return UNVERIFIED
     for j in range(rho0.shape[0]):
         rho[j] = rho0[j] if used[j] else np.nan
-    return VERIFIED if _dop(ab, rho, x, work[0], work[1]) <= DOP_MAX else UNVERIFIED
+    if _dop(ab, rho, x, work[0], work[1]) > DOP_MAX:
+        return UNVERIFIED
+    return VERIFIED if bias * _largest_slope(ab, rho, x, work[0], work[1]) <= alert else UNVERIFIED
+
+
+@numba.njit(cache=True)
+def _largest_slope(ab, rho, x, r, u) -> float:  # pragma: no cover - compiled
+    """max_j ‖k_j‖ / √(1 − h_jj) over the anchors ab (M, 3) whose range in rho (M,) is not
+    NaN: the move of the fix x (3,) per unit of test statistic √ΔT·σ that a bias on range j
+    causes (k_j = (UᵀU)⁻¹u_j, h_jj = u_jᵀk_j, U the unit vectors to x; r, u scratch); inf
+    when they do not fix x."""
+    residuals(x, ab, rho, r, u)
+    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
+    if not det > 0:
+        return math.inf
+    worst = 0.0
+    for j in range(ab.shape[0]):
+        if rho[j] != rho[j]:
+            continue
+        u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
+        k0 = (c00 * u0 + c01 * u1 + c02 * u2) / det
+        k1 = (c01 * u0 + c11 * u1 + c12 * u2) / det
+        k2 = (c02 * u0 + c12 * u1 + c22 * u2) / det
+        free = 1.0 - (u0 * k0 + u1 * k1 + u2 * k2)
+        if not free > 1e-12:  # the anchor alone fixes a direction: no echo on it shows
+            return math.inf
+        worst = max(worst, math.sqrt((k0 * k0 + k1 * k1 + k2 * k2) / free))
+    return worst
 
 
 @numba.njit(cache=True)

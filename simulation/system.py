@@ -59,7 +59,14 @@ import numpy as np
 from simulation import checks
 from simulation.chirp import Chirp
 from simulation.map_check import map_check, needs_check
-from simulation.positioning import FALSE_ALARM, METHODS, RANGE_SIGMA, PositionFix, locate
+from simulation.positioning import (
+    ALERT_LIMIT,
+    FALSE_ALARM,
+    METHODS,
+    RANGE_SIGMA,
+    PositionFix,
+    locate,
+)
 from simulation.receiver import MIN_OVERLAP, Receiver, delay_span, dsp_form, signal_chain
 
 __all__ = ["MIN_OVERLAP", "PRESETS", "Positioning", "System", "as_system", "closing_window"]
@@ -81,6 +88,8 @@ class Positioning:
     max_iter : the solver's iteration limit per fix.
     range_sigma : the receiver's range σ (m) the robust method tests the residuals at.
     false_alarm : the probability that the robust method's test rejects a consistent set.
+    alert_limit : (m) a robust fix is verified only if one echo its test misses cannot move
+        it farther (its protection level, :mod:`simulation.robust`).
     """
 
     method: str = "ls"
@@ -88,6 +97,7 @@ class Positioning:
     max_iter: int = 100
     range_sigma: float = RANGE_SIGMA
     false_alarm: float = FALSE_ALARM
+    alert_limit: float = ALERT_LIMIT
 
     def __post_init__(self) -> None:
         checks.choice("method", self.method, METHODS)
@@ -96,6 +106,8 @@ class Positioning:
         checks.real("range_sigma", self.range_sigma, low=0.0, high=10.0, low_open=True,
                     unit="m")  # fmt: skip
         checks.real("false_alarm", self.false_alarm, low=0.0, high=0.5, low_open=True)
+        checks.real("alert_limit", self.alert_limit, low=0.0, high=100.0, low_open=True,
+                    unit="m")  # fmt: skip
 
     def locate(self, room, anchors, ranges, *, full_output: bool = False):
         """Positions (..., P, 3) m (or a :class:`simulation.PositionFix`) from ranges
@@ -109,6 +121,7 @@ class Positioning:
         fix = locate(anchors, ranges, method=self.method, region=region,
                      bounded=self.keep_in_room, floor_plan=poly, max_iter=self.max_iter,
                      range_sigma=self.range_sigma, false_alarm=self.false_alarm,
+                     alert_limit=self.alert_limit,
                      room=room if mapped else None, full_output=full_output)  # fmt: skip
         if full_output and mapped:
             return _map_checked(room, anchors, fix)  # what it vouches for, on the room's map

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from simulation import Positioning, Room, locate
-from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, thresholds
+from simulation.robust import NO_FIX, UNVERIFIED, VERIFIED, bias_scales, thresholds
 
 ANCHORS = np.array(
     [
@@ -50,13 +50,31 @@ def _exhaustive(a, rho, sigma=SIGMA, false_alarm=1e-3):
     return None
 
 
+def _protection_level(a, x, sigma=SIGMA, false_alarm=1e-3):
+    """σ √λ max_j ‖k_j‖ / √(1 − h_jj) of the anchors a (n, 3) at x (3,), with numpy (the
+    module docstring's formula: K = (UᵀU)⁻¹Uᵀ, h_jj = u_jᵀk_j)."""
+    U = (x - a) / np.linalg.norm(x - a, axis=1, keepdims=True)
+    K = np.linalg.solve(U.T @ U, U.T)
+    h = np.sum(U * K.T, axis=1)
+    lam = bias_scales(false_alarm, len(a))[len(a) - 3]
+    return sigma * lam * np.max(np.linalg.norm(K, axis=0) / np.sqrt(1 - h))
+
+
+def _quality(a, x, alert_limit=0.5):
+    """The quality a fix at x (3,) resting on the anchors a (n ≥ 5, 3) that pass the test
+    gets: verified where its protection level is within the alert limit."""
+    return VERIFIED if _protection_level(a, x) <= alert_limit else UNVERIFIED
+
+
 def test_it_finds_the_consistent_subset_the_exhaustive_search_finds():
     """Up to three echoes among eight anchors (ranges 0.3–3 m too long, as an echo makes
-    them): the anchors kept are those of the exhaustive search, the fix is verified and
-    lies within centimetres of the node (positions kept in the room, as an installed
-    system keeps them: five anchors of this layout can leave a mirror position above the
-    ceiling)."""
+    them): the anchors kept are those of the exhaustive search, the fix lies within
+    centimetres of the node (positions kept in the room, as an installed system keeps
+    them: five anchors of this layout can leave a mirror position above the ceiling) and
+    is verified where its protection level is within the alert limit (0.5 m), as it is
+    for most."""
     rng = np.random.default_rng(1)
+    verified = 0
     for trial in range(40):
         x = _nodes(rng, 1)[0]
         rho = np.linalg.norm(x - ANCHORS, axis=1) + SIGMA * rng.standard_normal(8)
@@ -74,9 +92,11 @@ def test_it_finds_the_consistent_subset_the_exhaustive_search_finds():
         )
         assert ref is not None
         assert set(np.flatnonzero(fix.used[0])) == ref[1], trial
-        assert fix.quality[0] == VERIFIED
+        assert fix.quality[0] == _quality(ANCHORS[fix.used[0]], fix.x[0]), trial
+        verified += fix.quality[0] == VERIFIED
         assert np.linalg.norm(fix.x[0] - x) < 0.05
         assert np.allclose(fix.x[0], ref[2], atol=1e-6)
+    assert verified >= 35
 
 
 def test_one_echo_is_found_with_five_anchors_and_not_with_four():
@@ -252,6 +272,8 @@ def test_five_anchors_on_one_line_do_not_verify_a_fix():
         ({"method": "robust", "range_sigma": 0}, "range_sigma"),
         ({"method": "robust", "range_sigma": -0.1}, "range_sigma"),
         ({"method": "robust", "false_alarm": 0.7}, "false_alarm"),
+        ({"method": "robust", "alert_limit": 0.0}, "alert_limit"),
+        ({"method": "robust", "alert_limit": float("nan")}, "alert_limit"),
         ({"floor_plan": [[0, 0], [1, 1]]}, "floor_plan"),
     ],
 )
@@ -267,6 +289,7 @@ def test_too_few_anchors_are_refused_and_a_bad_positioning_too():
         ({"method": "lms"}, "method"),
         ({"range_sigma": 0.0}, "range_sigma"),
         ({"false_alarm": 1.0}, "false_alarm"),
+        ({"alert_limit": -0.5}, "alert_limit"),
     ):
         with pytest.raises(ValueError, match=name):
             Positioning(**kw)
@@ -333,7 +356,7 @@ def test_echoes_that_agree_at_a_point_hidden_from_their_anchors_are_rejected(tag
     assert np.linalg.norm(blind.x[0] - tag) > 0.5  # without the map the mirror wins
     fix = locate(anchors, ranges, method="robust", range_sigma=0.01, region=box, bounded=True,
                  room=RACK_ROOM, full_output=True)  # fmt: skip
-    assert np.linalg.norm(fix.x[0] - tag) < 1e-3 and fix.quality[0] == VERIFIED
+    assert np.linalg.norm(fix.x[0] - tag) < 1e-3 and fix.quality[0] == _quality(WEST, fix.x[0])
     assert fix.used[0].tolist() == [True] * 5 + [False] * 6
     same = MAPPED.locate(RACK_ROOM, anchors, ranges, full_output=True)
     np.testing.assert_allclose(same.x, fix.x, atol=1e-9)
@@ -446,6 +469,68 @@ def test_the_direct_anchors_are_found_when_their_minimal_sets_come_late():
         r += rng.normal(0, 0.005, 18)
         fix = locate(a, r[None], method="robust", region=box, bounded=True, full_output=True)
         right = np.linalg.norm(fix.x[0] - tag) < 0.05
-        found += right and fix.quality[0] == VERIFIED and fix.used[0, 13:].all()
+        found += right and fix.used[0, 13:].all()
+        # the first far anchor alone fixes a direction (leverage 0.96): an echo on it of
+        # 0.3 m would pass the test and move the fix 0.7 m, so the fix is not vouched for
+        if right:
+            assert fix.quality[0] == _quality(a[fix.used[0]], fix.x[0])
         assert right or fix.quality[0] != VERIFIED  # never a wrong fix called verified
     assert found >= 9
+
+
+def test_the_missed_echo_scale_is_the_non_centrality_the_test_misses():
+    from scipy.stats import norm
+
+    from simulation.robust import MISSED_DETECTION
+
+    s, q = bias_scales(1e-3, 6), thresholds(1e-3, 6)
+    # one degree of freedom in closed form: T = (z + √λ)², z standard normal
+    missed = norm.cdf(np.sqrt(q[1]) - s[1]) - norm.cdf(-np.sqrt(q[1]) - s[1])
+    assert missed == pytest.approx(MISSED_DETECTION, rel=1e-6)
+    # three, by sampling: a bias of √λ along one axis of three standard normals
+    z = np.random.default_rng(0).standard_normal((2_000_000, 3))
+    z[:, 0] += s[3]
+    assert np.mean(np.sum(z**2, axis=1) <= q[3]) == pytest.approx(MISSED_DETECTION, rel=0.1)
+    assert np.all(np.diff(s[1:]) > 0)  # more redundancy, a larger echo goes unseen
+
+
+def test_the_protection_level_is_the_move_of_the_largest_echo_the_test_misses():
+    # each anchor in turn gets the echo that raises T to λ (what the test misses with
+    # probability MISSED_DETECTION): least squares moves the fix by b_j ‖k_j‖, and the
+    # largest such move is the protection level; a fix is verified within the alert
+    # limit only
+    a, x = ANCHORS[:6], np.array([3.0, 1.5, 1.0])
+    d = np.linalg.norm(x - a, axis=1)
+    U = (x - a) / d[:, None]
+    K = np.linalg.solve(U.T @ U, U.T)
+    h = np.sum(U * K.T, axis=1)
+    root_lam = bias_scales(1e-3, 6)[3]
+    moves = []
+    for j in range(6):
+        b = SIGMA * root_lam / np.sqrt(1 - h[j])
+        rho = d.copy()
+        rho[j] += b
+        fix = locate(a, rho[None], region=REGION, bounded=True, full_output=True)
+        assert 2 * fix.cost[0] / SIGMA**2 == pytest.approx(root_lam**2, rel=0.05)
+        moves.append(np.linalg.norm(fix.x[0] - x))
+        assert moves[-1] == pytest.approx(b * np.linalg.norm(K[:, j]), rel=0.05)
+    level = _protection_level(a, x)
+    assert max(moves) == pytest.approx(level, rel=0.05)
+    for limit, quality in ((1.01 * level, VERIFIED), (0.99 * level, UNVERIFIED)):
+        fix = locate(a, d[None], method="robust", region=REGION, bounded=True, range_sigma=SIGMA,
+                     alert_limit=limit, full_output=True)  # fmt: skip
+        assert fix.quality[0] == quality and np.linalg.norm(fix.x[0] - x) < 1e-6
+
+
+def test_a_receiver_of_decimetres_cannot_vouch_for_a_fix_to_half_a_metre():
+    # the same anchors and tag, ranges good to a decimetre (a peak-pick receiver): the
+    # echo the test misses could move the fix by metres
+    a, x = ANCHORS, np.array([3.0, 1.5, 1.0])
+    rho = np.linalg.norm(x - a, axis=1)[None]
+    fine, coarse = (
+        locate(a, rho, method="robust", region=REGION, bounded=True, range_sigma=s,
+               full_output=True)
+        for s in (0.01, 0.1)
+    )  # fmt: skip
+    assert fine.quality[0] == VERIFIED and coarse.quality[0] == UNVERIFIED
+    assert _protection_level(a, x, sigma=0.1) > 0.5 >= _protection_level(a, x)
