@@ -219,12 +219,31 @@ def locate(
     tols = (xtol, ftol, gtol)
     flags = {"bounded": bounded, "full_output": full_output}
     a, rho, max_iter = _check_input(anchors, ranges, max_iter, tols, flags)
-    poly, room_map = _check_method(method, floor_plan, (range_sigma, false_alarm, alert_limit),
-                                   room)  # fmt: skip
+    test = (range_sigma, false_alarm, alert_limit)
+    poly, room_map = _check_method(method, floor_plan, test, room)
     M = a.shape[-2]
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
     layouts = a.reshape(-1, M, 3)
+    fix, start, (owner, lo, hi), heard = _least_squares(
+        layouts, R, region, x0, lead, bounded, int(max_iter), tols, poly
+    )
+    x, cost, status, nit = fix
+    used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
+    if method == "robust":
+        used, quality = _robust(layouts, owner, R, fix, lo, hi, bounded, poly, int(max_iter),
+                                tols, test, room_map)  # fmt: skip
+    converged = _converged(status, max_iter)
+    if not full_output:
+        return x.reshape(*lead, 3)
+    return _position_fix(lead, x, converged, status, nit, cost, start, used, quality)
+
+
+def _least_squares(layouts, R, region, x0, lead, bounded, max_iter, tols, poly):
+    """The least-squares fixes of the rows R (N, M) of ``layouts`` (L, M, 3) (module
+    docstring; the arguments as :func:`locate` checked them): ((x (N, 3), cost, status,
+    nit), the starting points (N, 3), (owner, lo, hi) the rows' layouts and search boxes,
+    heard (N, M))."""
     owner, lo, hi = _rows(layouts, len(R), region)
     svd = _centred_svd(layouts)
     heard = ~np.isnan(R)
@@ -232,18 +251,10 @@ def locate(
     x, lo, hi = _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded)
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
-        layouts, owner, R, x, lo, hi, bounded, int(max_iter), tols, poly
+        layouts, owner, R, x, lo, hi, bounded, max_iter, tols, poly
     )
     _mark_undetermined(layouts, owner, svd, heard, partial, x, cost, status)
-    used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
-    if method == "robust":
-        used, quality = _robust(layouts, owner, R, (x, cost, status, nit), lo, hi, bounded,
-                                poly, int(max_iter), tols, (range_sigma, false_alarm, alert_limit),
-                                room_map)  # fmt: skip
-    converged = _converged(status, max_iter)
-    if not full_output:
-        return x.reshape(*lead, 3)
-    return _position_fix(lead, x, converged, status, nit, cost, start, used, quality)
+    return (x, cost, status, nit), start, (owner, lo, hi), heard
 
 
 def _converged(status: np.ndarray, max_iter: int) -> np.ndarray:
@@ -265,7 +276,7 @@ def _check_method(method, floor_plan, test, room):
     poly = _floor_plan(floor_plan)
     _check_room(room)
     if method == "robust":
-        _check_test(*test)
+        check_test(*test)
         return poly, _room_map(room)
     return poly, NO_MAP
 
@@ -450,8 +461,8 @@ def _levenberg_marquardt(a, owner, R, x, lo, hi, bounded, max_iter, tols, poly=N
     return out
 
 
-def _check_test(range_sigma, false_alarm, alert_limit) -> None:
-    """The robust method's test settings (:func:`locate`), refused by name."""
+def check_test(range_sigma, false_alarm, alert_limit) -> None:
+    """The robust method's test settings (:func:`locate`), refused by name (ValueError)."""
     checks.real("range_sigma", range_sigma, low=0.0, high=10.0, low_open=True, unit="m")
     checks.real("false_alarm", false_alarm, low=0.0, high=0.5, low_open=True)
     checks.real("alert_limit", alert_limit, low=0.0, high=100.0, low_open=True, unit="m")

@@ -473,51 +473,52 @@ def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
 @numba.njit(cache=True)
 def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pragma: no cover
     """:data:`VERIFIED` when the n anchors ``used`` (M,) pass the test (T ≤ thr[n − 3],
-    n ≥ 5), fix x (3,) (:func:`_dop` ≤ :data:`DOP_MAX`) and keep the echo the test misses
-    within ``alert`` m (:func:`_largest_slope` times ``bias`` = σ √λ, m), else
-    :data:`UNVERIFIED`; rho (M,) is scratch."""
+    n ≥ 5), fix x (3,) (position dilution of precision ≤ :data:`DOP_MAX`) and keep the echo
+    the test misses within ``alert`` m (:func:`_largest_slope` times ``bias`` = σ √λ, m),
+    else :data:`UNVERIFIED`; rho (M,) is scratch."""
     if not (T <= thr[n - 3] and n >= 5):
         return UNVERIFIED
     for j in range(rho0.shape[0]):
         rho[j] = rho0[j] if used[j] else np.nan
-    if _dop(ab, rho, x, work[0], work[1]) > DOP_MAX:
+    u = work[1]
+    residuals(x, ab, rho, work[0], u)  # the unit vectors U from the anchors kept to x
+    c = _cofactors(u)
+    det = c[6]
+    # √tr((UᵀU)⁻¹): inf when the anchors do not fix x (collinear)
+    dop = math.sqrt((c[0] + c[3] + c[5]) / det) if det > 0 else math.inf
+    if dop > DOP_MAX:
         return UNVERIFIED
-    return VERIFIED if bias * _largest_slope(ab, rho, x, work[0], work[1]) <= alert else UNVERIFIED
+    return VERIFIED if bias * _largest_slope(rho, u, c) <= alert else UNVERIFIED
 
 
 @numba.njit(cache=True)
-def _largest_slope(ab, rho, x, r, u) -> float:  # pragma: no cover - compiled
-    """max_j ‖k_j‖ / √(1 − h_jj) over the anchors ab (M, 3) whose range in rho (M,) is not
-    NaN: the move of the fix x (3,) per unit of test statistic √ΔT·σ that a bias on range j
-    causes (k_j = (UᵀU)⁻¹u_j, h_jj = u_jᵀk_j, U the unit vectors to x; r, u scratch); inf
-    when they do not fix x."""
-    residuals(x, ab, rho, r, u)
-    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
+def _largest_slope(rho, u, c) -> float:  # pragma: no cover - compiled
+    """max_j ‖k_j‖ / √(1 − h_jj) over the anchors whose range in rho (M,) is not NaN: the
+    move of the fix per unit of test statistic √ΔT·σ that a bias on range j causes
+    (k_j = (UᵀU)⁻¹u_j, h_jj = u_jᵀk_j; u (M, 3) the unit vectors U to the fix, c their
+    :func:`_cofactors`); inf when they do not fix it."""
+    det = c[6]
     if not det > 0:
         return math.inf
     worst = 0.0
-    for j in range(ab.shape[0]):
+    for j in range(u.shape[0]):
         if rho[j] != rho[j]:
             continue
-        u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
-        k0 = (c00 * u0 + c01 * u1 + c02 * u2) / det
-        k1 = (c01 * u0 + c11 * u1 + c12 * u2) / det
-        k2 = (c02 * u0 + c12 * u1 + c22 * u2) / det
-        free = 1.0 - (u0 * k0 + u1 * k1 + u2 * k2)
+        a0, a1, a2 = _adjugate_times(c, u[j, 0], u[j, 1], u[j, 2])
+        k0, k1, k2 = a0 / det, a1 / det, a2 / det
+        free = 1.0 - (u[j, 0] * k0 + u[j, 1] * k1 + u[j, 2] * k2)
         if not free > 1e-12:  # the anchor alone fixes a direction: no echo on it shows
             return math.inf
         worst = max(worst, math.sqrt((k0 * k0 + k1 * k1 + k2 * k2) / free))
     return worst
 
 
-@numba.njit(cache=True)
-def _dop(ab, rho, x, r, u) -> float:  # pragma: no cover - compiled
-    """The position dilution of precision √tr((UᵀU)⁻¹) at x (3,) of the anchors ab (M, 3)
-    whose range in rho (M,) is not NaN, U the unit vectors from them to x (r, u scratch);
-    inf when they do not fix x (collinear)."""
-    residuals(x, ab, rho, r, u)
-    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
-    return math.sqrt((c00 + c11 + c22) / det) if det > 0 else math.inf
+@numba.njit(cache=True, inline="always")
+def _adjugate_times(c, u0, u1, u2):  # pragma: no cover - compiled
+    """adj(S) u for the :func:`_cofactors` c of the symmetric S and u = (u0, u1, u2)."""
+    c00, c01, c02, c11, c12, c22 = c[0], c[1], c[2], c[3], c[4], c[5]
+    return (c00 * u0 + c01 * u1 + c02 * u2, c01 * u0 + c11 * u1 + c12 * u2,
+            c02 * u0 + c12 * u1 + c22 * u2)  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")
@@ -542,7 +543,8 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
     """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
     the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
     residuals(x, ab, rho, r, u)
-    c00, c01, c02, c11, c12, c22, det = _cofactors(u)
+    c = _cofactors(u)
+    det = c[6]
     for j in range(ab.shape[0]):
         if rho[j] != rho[j]:
             score[j] = -math.inf
@@ -550,8 +552,8 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
         u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
         h = 0.0
         if det > 0:
-            h = (u0 * (c00 * u0 + c01 * u1 + c02 * u2) + u1 * (c01 * u0 + c11 * u1 + c12 * u2)
-                 + u2 * (c02 * u0 + c12 * u1 + c22 * u2)) / det  # fmt: skip
+            a0, a1, a2 = _adjugate_times(c, u0, u1, u2)
+            h = (u0 * a0 + u1 * a1 + u2 * a2) / det
         score[j] = r[j] * r[j] / max(1.0 - h, 1e-9)
 
 

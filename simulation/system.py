@@ -65,6 +65,7 @@ from simulation.positioning import (
     METHODS,
     RANGE_SIGMA,
     PositionFix,
+    check_test,
     locate,
 )
 from simulation.receiver import MIN_OVERLAP, Receiver, delay_span, dsp_form, signal_chain
@@ -103,11 +104,7 @@ class Positioning:
         checks.choice("method", self.method, METHODS)
         checks.flag("keep_in_room", self.keep_in_room)
         checks.count("max_iter", self.max_iter, low=1, high=MAX_ITERATIONS)
-        checks.real("range_sigma", self.range_sigma, low=0.0, high=10.0, low_open=True,
-                    unit="m")  # fmt: skip
-        checks.real("false_alarm", self.false_alarm, low=0.0, high=0.5, low_open=True)
-        checks.real("alert_limit", self.alert_limit, low=0.0, high=100.0, low_open=True,
-                    unit="m")  # fmt: skip
+        check_test(self.range_sigma, self.false_alarm, self.alert_limit)
 
     def locate(self, room, anchors, ranges, *, full_output: bool = False):
         """Positions (..., P, 3) m (or a :class:`simulation.PositionFix`) from ranges
