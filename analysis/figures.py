@@ -1362,25 +1362,29 @@ def sweep_curves(
     target_p95: float | None = None,
     paper: Mapping[int, Mapping[str, float]] | None = None,
     dpi: float = 100,
+    target_coverage: float | None = None,
 ) -> Figure:
     """σ, mean and P95 (m) of the validated error against the anchor count M, from rows
     with keys ``M``, ``std``, ``mean``, ``p95`` (at the evaluation nodes, solid) and, when
-    the rows have them, ``field_std``, ``field_mean``, ``field_p95`` (the field check,
-    dashed); the target P95 as a horizontal line and reference points (e.g. the paper's
-    Table I: {M: {"std", "mean", "p95"}}) as hollow markers."""
+    the rows have them, ``field_std``, ``field_mean``, ``field_p95``, ``field_median`` (the
+    field check, dashed); the target P95 as a horizontal line and reference points (e.g. the
+    paper's Table I: {M: {"std", "mean", "p95"}}) as hollow markers. Rows with ``covered``
+    (the share of the nodes seeing ``coverage_k`` anchors in line of sight and reach) add
+    it in % on a right-hand axis, with ``target_coverage`` (a share) as a dotted line."""
     fig = new_figure((6.4, 4.0), dpi=dpi)
     ax = fig.add_subplot()
     M = np.array([r["M"] for r in rows], dtype=int)
     styles = (("std", "σ", "o", PALETTE[0]), ("mean", "mean", "s", PALETTE[1]),
-              ("p95", "P95", "^", PALETTE[2]))  # fmt: skip
+              ("p95", "P95", "^", PALETTE[2]), ("median", "median", "D", PALETTE[3]))  # fmt: skip
     for key, label, marker, color in styles:
-        y = np.array([np.nan if r[key] is None else r[key] for r in rows], dtype=float)
-        field = np.array([r.get(f"field_{key}") for r in rows], dtype=float)  # None: NaN
+        y = np.array([r.get(key) for r in rows], dtype=float)  # None: NaN
+        field = np.array([r.get(f"field_{key}") for r in rows], dtype=float)
         if np.isfinite(field).any():  # first: what an installation delivers
             ax.plot(M, field, marker=marker, color=color, linestyle="--",
                     label=f"field {label}")  # fmt: skip
             label = f"{label}, evaluation nodes"
-        ax.plot(M, y, marker=marker, color=color, label=label)
+        if np.isfinite(y).any():
+            ax.plot(M, y, marker=marker, color=color, label=label)
         if paper:
             pm = sorted(m for m in paper if key in paper[m])
             ax.plot(pm, [paper[m][key] for m in pm], linestyle="none", marker=marker,
@@ -1394,9 +1398,31 @@ def sweep_curves(
         handles.append(Line2D([], [], linestyle="none", marker="o", markerfacecolor="none",
                               color="grey"))  # fmt: skip
         labels.append("paper, Table I")
-    ax.legend(handles, labels, fontsize=8)
+    more = _coverage_axis(ax, rows, M, target_coverage)
+    ax.legend(handles + more[0], labels + more[1], fontsize=8)
     ax.set_xlabel("anchors M")
     ax.set_ylabel("Euclidean error (m)")
     ax.set_xticks(M)
     ax.grid(alpha=0.3)
     return fig
+
+
+def _coverage_axis(ax, rows, M, target_coverage):
+    """The rows' line-of-sight coverage (%) on a right-hand axis of ``ax`` with the target
+    as a dotted line; returns the legend's (handles, labels) for it (none without it)."""
+    cov = np.array([r.get("covered") for r in rows], dtype=float)
+    if not np.isfinite(cov).any():
+        return [], []
+    k = next((int(r["coverage_k"]) for r in rows if r.get("coverage_k")), None)
+    right = ax.twinx()
+    label = "line of sight" + ("" if k is None else f", nodes seeing {k}")
+    (line,) = right.plot(M, 100 * cov, color="grey", marker="x", linestyle=":", label=label)
+    handles, labels = [line], [label + " (right)"]
+    if target_coverage:
+        right.axhline(100 * target_coverage, color="grey", linestyle=":", linewidth=1)
+        right.annotate(f"target {100 * target_coverage:g} %", (M.max(), 100 * target_coverage),
+                       textcoords="offset points", xytext=(-60, -12), fontsize=8,
+                       color="grey")  # fmt: skip
+    right.set_ylim(0, 105)
+    right.set_ylabel("nodes covered (%)")
+    return handles, labels

@@ -26,11 +26,16 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
     """The report of a sweep's ``to_dict()`` (as read back from ``sweep.json``)."""
     rows = data["rows"]
     paper = TABLE1 if data.get("room", {}).get("name") == "techtile" else None
-    png = png_bytes(sweep_curves(rows, data.get("target_p95"), paper, dpi=dpi), palette=True)
+    fig = sweep_curves(
+        rows, data.get("target_p95"), paper, dpi=dpi, target_coverage=data.get("target_coverage")
+    )
+    png = png_bytes(fig, palette=True)
     target = data.get("target_p95")
     goal = f"availability ≥ {100 * data.get('target_availability', 0.99):g} %"
+    if data.get("target_coverage"):
+        goal += f", line of sight ≥ {100 * data['target_coverage']:g} %"
     if target is not None:
-        goal += f" and P95 ≤ {target:g} m"
+        goal += f" and field P95 ≤ {target:g} m"
     if data.get("recommended") is None:
         verdict = f"No anchor count of the sweep reaches {goal}."
     else:

@@ -3,12 +3,14 @@
 ``sweep(room, anchors=range(4, 11), target_p95=1.0)`` runs :func:`placement.seed_then_pso`
 once per M on one shared range table (the table depends on the candidate points and the
 scene draws, not on M), and recommends the smallest M whose validated availability (the
-share of node realizations with a fix) reaches ``target_availability`` and whose
-validated P95 meets ``target_p95`` (docs/model.md, "Anchor-count sweep").
+share of node realizations with a fix) reaches ``target_availability``, whose share of
+nodes seeing enough anchors in line of sight reaches ``target_coverage`` and whose P95 in
+the field meets ``target_p95`` (docs/model.md, "Anchor-count sweep").
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import time
@@ -65,7 +67,8 @@ class SweepRow:
 class SweepResult:
     """Result of :func:`sweep`: rows (one per M, increasing), recommended the smallest M
     whose validated availability ≥ ``target_availability``, line-of-sight coverage ≥
-    ``target_coverage`` and P95 ≤ ``target_p95`` (when given; None when no M does), the
+    ``target_coverage`` and field P95 ≤ ``target_p95`` (when given; :func:`recommend`; None
+    when no M does), the
     room, the settings and the seconds of the shared table and of the whole sweep."""
 
     rows: tuple[SweepRow, ...]
@@ -143,14 +146,17 @@ def recommend(
     rows, target_p95: float | None, target_availability: float, target_coverage: float = 0.0
 ) -> int | None:
     """The smallest M of ``rows`` whose availability ≥ ``target_availability``, whose
-    line-of-sight coverage ≥ ``target_coverage`` and, with a ``target_p95``, whose P95 ≤ it;
-    None when none does."""
+    line-of-sight coverage ≥ ``target_coverage`` and, with a ``target_p95``, whose P95 ≤ it:
+    the field's P95 (random tags, anchors mounted with error: what an installation gets)
+    where the row has one, else the P95 at the evaluation nodes; None when none does."""
     for r in rows:
         covered = getattr(r, "covered", math.nan)
+        field_p95 = getattr(r, "field_p95", math.nan)
+        p95 = field_p95 if math.isfinite(field_p95) else r.p95
         if (
             ties.reaches(r.availability, target_availability)
             and (target_coverage <= 0 or ties.reaches(covered, target_coverage))
-            and (target_p95 is None or ties.meets(r.p95, target_p95))
+            and (target_p95 is None or ties.meets(p95, target_p95))
         ):
             return r.M
     return None
@@ -171,6 +177,19 @@ def _shared_table(first, most: int, seed: int):
                          f"(spacing {opt.spacing_for(room):g} m) of this room")  # fmt: skip
     return build_table(room, opt, first.nodes, seed, first.executor, first.progress,
                        system=first.system)  # fmt: skip
+
+
+def _kept_to(search, effort: str, target_coverage: float):
+    """The search options of every M: ``search`` (None: the ``effort`` preset's) with
+    ``min_coverage`` the coverage target where it is None, so that each M is planned for the
+    coverage the sweep asks of it where M anchors can reach it."""
+    from placement.effort import effort_options
+    from placement.simselect import SearchOptions
+
+    base = effort_options(effort).search if search is None else search
+    if isinstance(base, SearchOptions) and base.min_coverage is None:
+        return dataclasses.replace(base, min_coverage=target_coverage)
+    return base
 
 
 def sweep(
@@ -200,8 +219,11 @@ def sweep(
     ``seed_then_pso(room, M, ...)``; and recommend the smallest M whose validated
     availability reaches ``target_availability`` (a share in (0, 1]), whose share of nodes
     that see k anchors in line of sight and reach reaches ``target_coverage`` (k = 5 for a
-    system that rejects echoes, 4 otherwise; 0 turns it off) and whose validated P95 (m) ≤
-    ``target_p95`` (when given).
+    system that rejects echoes, 4 otherwise; 0 turns it off) and whose P95 (m) in the field
+    check (at the evaluation nodes where the validation has no field check) ≤ ``target_p95``
+    (when given). Each M whose coverage selection reaches
+    ``target_coverage`` is planned keeping every layout to it (``search.min_coverage``,
+    :class:`placement.simselect.SearchOptions`, where ``search`` leaves it None).
 
     room : the room (None: the embedded default, :meth:`simulation.Room.techtile`).
     system : the positioning system (:class:`simulation.System`, a preset's name or None:
@@ -220,6 +242,7 @@ def sweep(
         "target_availability", target_availability, low=0.0, high=1.0, low_open=True
     )
     target_coverage = checks.real("target_coverage", target_coverage, low=0.0, high=1.0)
+    search = _kept_to(search, effort, target_coverage)
     kw = {"system": system, "cost": cost, "initial": initial, "search": search, "swarm": swarm,
           "finalists": finalists, "validation": validation, "effort": effort, "nodes": nodes,
           "executor": executor, "progress": progress}  # fmt: skip

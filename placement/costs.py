@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
-from placement.rangetable import check_mount_tolerance, range_table, table_errors
+from placement.coverage import CoverageTarget, constrain
+from placement.rangetable import check_mount_tolerance, range_table, sight_counts, table_errors
 from simulation import checks, degeneracy
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
@@ -95,7 +96,9 @@ class DrawsCost:
     point in its surface plane; positioning uses the planned points. The cost is then a
     deterministic function of the layout (the generator is ignored), so a swarm compares
     its particles without noise between them (docs/model.md, "Range tables and scene draws").
-    ``system``: the system simulated (default the paper's).
+    ``system``: the system simulated (default the paper's). ``coverage_target``: a
+    :class:`placement.coverage.CoverageTarget` the cost enforces at the first draw's nodes
+    (:func:`placement.coverage.constrain`; None: none).
     """
 
     room: Room
@@ -106,6 +109,7 @@ class DrawsCost:
     statistic: str = "variance"
     precision: str = "float32"
     system: System = field(default_factory=System)
+    coverage_target: CoverageTarget | None = None
 
     def __post_init__(self) -> None:
         checks.choice("statistic", self.statistic, SIMULATED_STATISTICS)
@@ -122,8 +126,12 @@ class DrawsCost:
 
     def errors(self, anchors) -> np.ndarray:
         """(D · P,) Euclidean position errors (m) of the layout over every draw and node."""
+        return table_errors(self._table(anchors), np.arange(len(anchors))[None])[0]
+
+    def _table(self, anchors):
+        """The range table of the layout's M anchors (its M candidates) on the draws."""
         a = np.asarray(anchors, dtype=float)
-        table = range_table(
+        return range_table(
             self.room,
             a,
             self.nodes,
@@ -134,12 +142,16 @@ class DrawsCost:
             precision=self.precision,
             system=self.system,
         )
-        return table_errors(table, np.arange(len(a))[None])[0]
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
         if degeneracy.anchor_rank(anchors) < 2:  # collinear: the position is not determined
             return math.inf
-        return SIMULATED_STATISTICS[self.statistic](self.errors(anchors))
+        table = self._table(anchors)
+        layout = np.arange(len(table.candidates))[None]
+        cost = SIMULATED_STATISTICS[self.statistic](table_errors(table, layout)[0])
+        if self.coverage_target is None:
+            return cost
+        return float(constrain([cost], sight_counts(table, layout), self.coverage_target)[0])
 
 
 @dataclass(frozen=True)

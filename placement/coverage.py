@@ -83,6 +83,49 @@ def plane_groups(room, candidates) -> list[np.ndarray]:
     return out
 
 
+@dataclass(frozen=True)
+class CoverageTarget:
+    """A requirement on the layouts of a search: at least ``share`` of the nodes see ``k``
+    anchors in line of sight and reach (:func:`visibility`, at the exact nodes of the
+    table's first draw). A layout below it costs more than any that meets it
+    (:func:`constrain`): the search keeps to the layouts that meet it, as a constrained
+    swarm ranks the feasible first (Deb's rule)."""
+
+    k: int
+    share: float
+
+    def __post_init__(self) -> None:
+        checks.count("k", self.k, low=1, high=10_000)
+        checks.real("share", self.share, low=0.0, high=1.0)
+
+    def needed(self, P: int) -> int:
+        """The nodes of P that must be covered: ⌈share · P⌉, a product within a tie of
+        an integer counting as that integer."""
+        return int(math.ceil(self.share * P - 1e-9))
+
+    def to_dict(self) -> dict:
+        return {"k": self.k, "share": self.share}
+
+
+#: the cost of a layout below a coverage target: BELOW_TARGET_COST · (1 + the share of the
+#: nodes it is short) + its cost; above every cost of a layout that meets it (the costs of
+#: layouts with no-fixes stay below 2·NO_FIX_COST + 1e6, :mod:`simulation.statistics`)
+BELOW_TARGET_COST = 1e14
+
+
+def constrain(costs, counts, target: CoverageTarget | None) -> np.ndarray:
+    """(L,) the costs (L,) of layouts whose nodes see ``counts`` (L, P) anchors in line of
+    sight and reach, with :data:`BELOW_TARGET_COST` added below ``target`` (None: the
+    costs unchanged)."""
+    costs = np.asarray(costs, dtype=float)
+    if target is None:
+        return costs
+    counts = np.asarray(counts)
+    P = counts.shape[-1]
+    short = np.maximum(target.needed(P) - np.sum(counts >= target.k, axis=-1), 0)
+    return np.where(short > 0, BELOW_TARGET_COST * (1.0 + short / P) + costs, costs)
+
+
 def visibility(table, draw: int = 0) -> np.ndarray:
     """(P, N) bool: node p of the table's draw ``draw`` sees candidate j: nothing blocks the
     direct path, and it lies within the signal's reach and beyond its near limit."""

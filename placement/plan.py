@@ -42,6 +42,7 @@ import numpy as np
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement import resume, ties
 from placement.costs import AUTO, DrawsCost, cost_name, default_cost, is_simulated, make_cost
+from placement.coverage import CoverageTarget
 from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
@@ -315,8 +316,9 @@ class Planner:
         for k, start in enumerate(starts):
             # each on the table grown by its own lattices: another layout's columns would
             # change its descent (docs/model.md, "Refinement after the swarm")
+            table = dataclasses.replace(self.range_table(), coverage_target=self.coverage_target)
             refined, _, n = refine_on_table(
-                self.room, self.range_table(), [start], statistic=self.cost, options=opt,
+                self.room, table, [start], statistic=self.cost, options=opt,
                 rng=phase_seed(self.seed, "refinement"), executor=self.executor,
                 workers=self.workers,
             )  # fmt: skip
@@ -423,7 +425,16 @@ class Planner:
         return DrawsCost(self.room, sets, exact_draws=exact,
                          mount_tolerance=self.search.mount_tolerance,
                          seed=phase_seed(self.seed, key), statistic=self.cost,
-                         precision=self.search.precision, system=self.system)  # fmt: skip
+                         precision=self.search.precision, system=self.system,
+                         coverage_target=self.coverage_target)  # fmt: skip
+
+    @property
+    def coverage_target(self) -> CoverageTarget | None:
+        """The coverage target the search kept to (``search.min_coverage`` where M anchors
+        can reach it, :func:`placement.simselect.coverage_target`), which the swarm, the
+        refinement and the finalists keep to as well; None: none."""
+        t = self.search_summary.get("coverage_target")
+        return None if t is None else CoverageTarget(int(t["k"]), float(t["share"]))
 
     def identity(self) -> dict[str, Any]:
         """What identifies the run for its checkpoint: the room, every setting, the nodes."""

@@ -35,9 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from placement.coverage import CoverageTarget, constrain, visibility
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.workers import run_jobs
-from simulation import checks, streams
+from simulation import checks, degeneracy, streams
 from simulation.receiver import PRECISIONS
 from simulation.room import Room
 from simulation.statistics import row_statistics
@@ -54,6 +55,8 @@ class RangeTable:
     mounted points (m); room the room and system the system simulated (its positioning
     solves the table's fixes); line_of_sight (D, P, N) bool, nothing blocks the direct
     path. seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
+    coverage_target: a :class:`placement.coverage.CoverageTarget` the costs of its layouts
+    enforce (:func:`table_costs`; None: none).
     """
 
     candidates: np.ndarray
@@ -67,6 +70,7 @@ class RangeTable:
     mount_tolerance: float
     exact_draws: int
     precision: str
+    coverage_target: CoverageTarget | None = None
 
     @property
     def draws(self) -> int:
@@ -319,37 +323,50 @@ def _layout_indices(table: RangeTable, layouts) -> np.ndarray:
     return S.astype(int, copy=False)
 
 
-def _fixes(table: RangeTable, layouts):
-    """The :class:`~simulation.positioning.PositionFix` of layouts (L, M) of candidates
-    over every draw and node of the table, positioned in one batch."""
+def _positions(table: RangeTable, layouts) -> tuple[np.ndarray, np.ndarray]:
+    """(x (L, D, P, 3), fixed (L,)): the positions of layouts (L, M) of candidates over every
+    draw and node of the table, positioned in one batch (positions only: a score needs no
+    fix's quality), and whether each layout's anchors determine a position (not collinear
+    or coincident: ``locate``'s status −1)."""
     S = _layout_indices(table, layouts)
     ranges = np.moveaxis(table.ranges[:, :, S], 2, 0)  # (L, D, P, M)
-    positioning = table.system.positioning
-    return positioning.locate(table.room, table.candidates[S], ranges, full_output=True)
+    anchors = table.candidates[S]
+    x = table.system.positioning.locate(table.room, anchors, ranges)
+    return x, np.asarray(degeneracy.anchor_rank(anchors) >= 2).reshape(len(S))
 
 
-def _errors(table: RangeTable, fix) -> np.ndarray:
-    """(L, D·P) Euclidean errors (m) of the fixes of L layouts at the table's nodes."""
-    e = np.linalg.norm(fix.x - table.nodes, axis=-1)  # (L, D, P)
+def _errors(table: RangeTable, x) -> np.ndarray:
+    """(L, D·P) Euclidean errors (m) of the positions x (L, D, P, 3) at the table's nodes."""
+    e = np.linalg.norm(x - table.nodes, axis=-1)  # (L, D, P)
     return e.reshape(len(e), math.prod(e.shape[1:]))  # explicit: L may be 0
 
 
 def table_errors(table: RangeTable, layouts) -> np.ndarray:
     """(L, D·P) Euclidean position errors (m) of layouts of candidates ``layouts`` (L, M)
     indices over every draw and node of the table, positioned in one batch."""
-    return _errors(table, _fixes(table, layouts))
+    return _errors(table, _positions(table, layouts)[0])
 
 
 def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.ndarray:
     """(L,) the simulated ``statistic`` of each layout's errors over all D · P table
     entries (:func:`table_errors`), availability first (a layout with a node realization
-    without a fix costs more than any with none: :data:`simulation.statistics.NO_FIX_COST`);
+    without a fix costs more than any with none: :data:`simulation.statistics.NO_FIX_COST`),
+    and before that the table's coverage target (:func:`placement.coverage.constrain`);
     +inf for a layout whose anchors are collinear (``locate``'s status −1)."""
-    fix = _fixes(table, layouts)
-    e = _errors(table, fix)
+    x, fixed = _positions(table, layouts)
+    e = _errors(table, x)
     # collinear or coincident anchors leave the position undetermined: never a solution
-    fixed = ~np.any(fix.status.reshape(e.shape) == -1, axis=1)
-    return np.where(fixed, row_statistics(statistic, e), math.inf)
+    costs = np.where(fixed, row_statistics(statistic, e), math.inf)
+    if table.coverage_target is None:
+        return costs
+    return constrain(costs, sight_counts(table, layouts), table.coverage_target)
+
+
+def sight_counts(table: RangeTable, layouts) -> np.ndarray:
+    """(L, P) the anchors of each layout (L, M) of candidates that each node of the table's
+    first draw sees in line of sight and reach (:func:`placement.coverage.visibility`)."""
+    S = _layout_indices(table, layouts)
+    return np.sum(visibility(table)[:, S], axis=-1).T
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

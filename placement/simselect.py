@@ -140,10 +140,16 @@ class Chain:
     nfev: int = 0
 
     @classmethod
-    def start(cls, table, M: int, statistic: str, tries: int, rng) -> Chain:
-        """The best of ``tries`` random layouts of M candidates."""
+    def start(cls, table, M: int, statistic: str, tries: int, rng, around=None, nbr=None) -> Chain:
+        """The best of ``tries`` random layouts of M candidates; with ``around`` (M,) a
+        layout and ``nbr`` the neighbourhoods, random layouts near it instead, each with
+        half its anchors moved to random neighbours (:func:`kick`): where the table holds
+        a coverage target, random layouts anywhere rarely meet it."""
         N = len(table.candidates)
-        layouts = [rng.choice(N, M, replace=False) for _ in range(tries)]
+        if around is None:
+            layouts = [rng.choice(N, M, replace=False) for _ in range(tries)]
+        else:
+            layouts = [kick(around, nbr, rng, max(2, M // 2)) for _ in range(tries)]
         costs = table_costs(table, np.stack(layouts), statistic)
         k = ties.argmin(costs)
         S = np.asarray(layouts[k])
@@ -256,6 +262,12 @@ class SearchOptions:
     coverage_k : in a room where walls, obstacles or the signal's reach hide candidates
         from some nodes, the first chain starts from the coverage selection that makes
         the most nodes see this many anchors (:mod:`placement.coverage`; 0: off).
+    min_coverage : the share of the nodes every layout must cover with ``coverage_k``
+        anchors in line of sight and reach, when the coverage selection shows that M
+        anchors can (:class:`placement.coverage.CoverageTarget`: a layout below it costs
+        more than any above, in the search, the swarm, the refinement and the finalists);
+        0: none; None (the default): none in a plan, the sweep's ``target_coverage`` in
+        :func:`placement.sweep`.
     """
 
     spacing: float | None = None
@@ -278,6 +290,7 @@ class SearchOptions:
     keep: int = 4
     precision: str = "float32"
     coverage_k: int = 5
+    min_coverage: float | None = None
 
     def __post_init__(self) -> None:
         if self.spacing is not None:
@@ -311,6 +324,8 @@ class SearchOptions:
         checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
         checks.count("coverage_k", self.coverage_k, low=0, high=MAX_ANCHORS)
+        if self.min_coverage is not None:
+            checks.real("min_coverage", self.min_coverage, low=0.0, high=1.0)
 
     def spacing_for(self, room: Room) -> float:
         """The candidate spacing (m) in ``room``: ``spacing`` when given, else
@@ -409,12 +424,17 @@ SEGMENTS = 8
 
 def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts=()):
     """Start (the first chains from ``starts``, index layouts (M,), the others from random
-    layouts), advance (in :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as
-    ``workers`` jobs; [(S, cost, local, evaluations)] per chain."""
+    layouts, near the first start where the table holds a coverage target), advance (in
+    :data:`SEGMENTS` segments) and finish ``opt.chains`` chains as ``workers`` jobs;
+    [(S, cost, local, evaluations)] per chain."""
     n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
     view = first_draws(table, n)
+    # under a coverage target the other chains start near the first start, which meets it
+    around = starts[0] if starts and table.coverage_target is not None else None
     chains = [
-        Chain.start(view, M, statistic, opt.random_starts, streams.stream(seed, 10, k))
+        Chain.start(
+            view, M, statistic, opt.random_starts, streams.stream(seed, 10, k), around, nbr
+        )  # fmt: skip
         if k >= len(starts)
         else Chain.at(view, starts[k], statistic, streams.stream(seed, 10, k))
         for k in range(opt.chains)
@@ -499,12 +519,26 @@ def simulated_select(
     t1 = time.perf_counter()
     nbr = nearest(table.candidates, opt.neighbours)
     cover = _coverage_start(table, M, opt.coverage_k)
+    target = coverage_target(opt, cover)
+    table = dataclasses.replace(table, coverage_target=target)
     starts = () if cover is None else (cover.indices,)
     found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
     sel = _selection(table, statistic, found, nfev, (t0, t1, t2))
-    return sel if cover is None else dataclasses.replace(sel, coverage=cover)
+    return dataclasses.replace(sel, coverage=cover, coverage_target=target)
+
+
+def coverage_target(opt: SearchOptions, cover):
+    """The :class:`placement.coverage.CoverageTarget` the search keeps to: ``opt.min_coverage``
+    with the coverage selection's k where the selection ``cover`` reaches it (None: no
+    target, or one that M anchors cannot reach, or every node sees every candidate)."""
+    from placement.coverage import CoverageTarget
+
+    share = opt.min_coverage or 0.0
+    if share <= 0 or cover is None or not ties.reaches(cover.covered, share):
+        return None
+    return CoverageTarget(cover.k, share)
 
 
 def _coverage_start(table, M: int, k: int):
@@ -612,7 +646,8 @@ class SimulatedSelection(LayoutResult):
     scored on the table; table_windows the received windows simulated; timings in
     seconds; status a code of :data:`SELECTION_STATUS`; coverage the coverage selection
     that started the first chain (:class:`placement.coverage.CoverageSelection`, None
-    where every node sees every candidate).
+    where every node sees every candidate); coverage_target the target every layout was
+    kept to (:func:`coverage_target`; None: none).
     """
 
     FUN: ClassVar[str] = "cost"
@@ -632,6 +667,7 @@ class SimulatedSelection(LayoutResult):
     message: str = ""
     table: RangeTable | None = field(default=None, repr=False)
     coverage: Any = None
+    coverage_target: Any = None
 
     def layouts(self, k: int | None = None) -> np.ndarray:
         """(k, M, 3) the anchors of the k best local optima."""
@@ -653,4 +689,6 @@ class SimulatedSelection(LayoutResult):
             "message": self.message,
             "fun": self.cost,
             **({} if self.coverage is None else {"coverage": self.coverage.to_dict()}),
-        }
+            **({} if self.coverage_target is None
+               else {"coverage_target": self.coverage_target.to_dict()}),
+        }  # fmt: skip

@@ -452,8 +452,7 @@ def line_of_sight(room, anchors, points) -> np.ndarray:
     out_shape = (*a.shape[:-2], p.shape[0], a.shape[-2])
     if room.is_shoebox and not room.obstacles:
         return np.ones(out_shape, dtype=bool)
-    refl = reflectors(room)
-    geo = (refl.kind, refl.normal, refl.d, refl.box, refl.blocking, refl.plan)
+    geo = blocking_map(room)  # the blocking reflectors alone: what _blocked tests
     flat = a.reshape(-1, 3)
     cols = [_direct_los(p, np.ascontiguousarray(s), *geo) for s in flat]
     los = np.stack(cols, axis=-1) if cols else np.zeros((p.shape[0], 0), dtype=bool)

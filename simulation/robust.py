@@ -123,11 +123,15 @@ COPLANAR = 1e-12
 SUBSET_ITER = 30
 
 
+@functools.lru_cache(maxsize=64)
 def thresholds(false_alarm: float, M: int) -> np.ndarray:
-    """(M + 1,) the χ² quantiles q[k] with P(χ²_k > q[k]) = ``false_alarm`` (q[0] = 0)."""
+    """(M + 1,) the χ² quantiles q[k] with P(χ²_k > q[k]) = ``false_alarm`` (q[0] = 0).
+    Read-only (cached)."""
     from scipy.stats import chi2
 
-    return np.concatenate([[0.0], chi2.isf(false_alarm, np.arange(1, M + 1))])
+    q = np.concatenate([[0.0], chi2.isf(false_alarm, np.arange(1, M + 1))])
+    q.flags.writeable = False
+    return q
 
 
 @functools.lru_cache(maxsize=64)

@@ -129,8 +129,8 @@ class Positioning:
         kept = "kept in the room" if self.keep_in_room else "not kept in the room"
         if self.method == "ls":
             return f"least squares, {kept}"
-        return (f"robust least squares (echoes rejected at range sigma {self.range_sigma:g} m), "
-                f"{kept}")  # fmt: skip
+        return (f"robust least squares (echoes rejected at range sigma {self.range_sigma:g} m, "
+                f"verified within {self.alert_limit:g} m), {kept}")  # fmt: skip
 
 
 def _map_checked(room, anchors, fix: PositionFix) -> PositionFix:

@@ -127,3 +127,35 @@ def test_the_sweep_table_prints_a_dash_for_a_check_that_did_not_run(capsys):
     _print_table(res, None)
     line = capsys.readouterr().out.splitlines()[1]
     assert "nan" not in line and line.split()[-1] == "–" and line.split()[1].startswith("–")
+
+
+def test_the_sweep_figure_shows_the_field_median_and_the_coverage_with_its_target():
+    from analysis.figures import sweep_curves
+
+    rows = [{"M": m, "std": 0.5, "mean": 0.7, "p95": 1.5, "field_std": 0.6, "field_mean": 0.8,
+             "field_p95": 2.0, "field_median": 0.01 * m, "covered": c, "coverage_k": 5}
+            for m, c in ((16, 0.8), (18, 0.96))]  # fmt: skip
+    fig = sweep_curves(rows, 0.2, target_coverage=0.95)
+    ax, right = fig.axes
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "field median" in labels and "line of sight, nodes seeing 5 (right)" in labels
+    median = next(ln for ln in ax.lines if ln.get_label() == "field median")
+    np.testing.assert_allclose(median.get_ydata(), [0.16, 0.18])
+    np.testing.assert_allclose(right.lines[0].get_ydata(), [80, 96])
+    assert right.lines[1].get_ydata()[0] == pytest.approx(95)  # the target's line
+    # no coverage in the rows: one axis, as before
+    plain = [{k: v for k, v in r.items() if k not in ("covered", "coverage_k")} for r in rows]
+    assert len(sweep_curves(plain, 0.2, target_coverage=0.95).axes) == 1
+
+
+def test_the_recommendation_reads_the_field_p95_where_there_is_one():
+    from placement.anchor_sweep import SweepRow, recommend
+
+    def row(M, p95, field_p95):
+        return SweepRow(M, 0.1, 0.05, p95, 0.1, 0.2, 0.1, 0.2, np.zeros((M, 3)), 1.0, 1.0,
+                        field_p95=field_p95, covered=1.0, coverage_k=5)  # fmt: skip
+
+    # M = 20 meets the target at the evaluation nodes only; the field says M = 22
+    rows = [row(20, 0.10, 0.41), row(22, 0.12, 0.19), row(24, 0.3, float("nan"))]
+    assert recommend(rows, 0.2, 0.99, 0.95) == 22
+    assert recommend(rows[2:], 0.35, 0.99, 0.95) == 24  # no field check: the nodes' P95

@@ -78,6 +78,13 @@ def register(sub) -> None:
     p.add_argument("--search-evaluations", type=int, help="table layouts scored per chain")
     p.add_argument("--search-draws", type=int, help="scene draws of the range table")
     p.add_argument(
+        "--min-coverage",
+        type=float,
+        metavar="SHARE",
+        help="keep every layout to this share of the nodes seeing 5 anchors in line of sight "
+        "and reach, where M anchors can (off)",
+    )
+    p.add_argument(
         "--finalists",
         type=int,
         help="best distinct swarm layouts scored, with the starting layouts and the refined "
@@ -147,7 +154,8 @@ def _executor(args, stack: contextlib.ExitStack):
 FLAGS = {
     "search": {"spacing": "--search-spacing", "chains": "--search-chains",
                "evaluations": "--search-evaluations", "draws": "--search-draws",
-               "exact_draws": "--search-draws", "mount_tolerance": "--mount-tolerance"},
+               "exact_draws": "--search-draws", "mount_tolerance": "--mount-tolerance",
+               "min_coverage": "--min-coverage"},
     "swarm": {"particles": "--particles", "iterations": "--iterations",
               "eval_timeout": "--eval-timeout"},
     "finalists": {"count": "--finalists", "draws": "--finalist-draws",
@@ -174,7 +182,7 @@ def plan_options(args) -> dict:
     given = {
         "search": {"spacing": args.search_spacing, "chains": args.search_chains,
                    "evaluations": args.search_evaluations, "draws": args.search_draws,
-                   "mount_tolerance": args.mount_tolerance},
+                   "mount_tolerance": args.mount_tolerance, "min_coverage": args.min_coverage},
         "swarm": {"particles": args.particles, "iterations": args.iterations,
                   "eval_timeout": args.eval_timeout},
         "finalists": {"count": args.finalists, "draws": args.finalist_draws,
@@ -297,6 +305,13 @@ def _print_result(res, args) -> None:
               f"{cover['k']} anchors in line of sight and reach (bound "
               f"{100 * cover['bound']:.1f} %, {cover['status']}; greedy "
               f"{100 * cover['greedy']:.1f} %): the first search chain's start")  # fmt: skip
+    share, target = res.settings.search.min_coverage, search.get("coverage_target")
+    if share and target:
+        print(f"coverage target: every layout kept to {100 * share:g} % of the nodes seeing "
+              f"{target['k']} anchors in line of sight and reach")  # fmt: skip
+    elif share and cover:
+        print(f"coverage target {100 * share:g} %: not applied, {res.settings.M} anchors "
+              f"cover {100 * cover['covered']:.1f} % at most found")  # fmt: skip
     for s in res.initial:
         table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
         print(f"  initial {s.name:<12} swarm cost {s.cost:.4g}{table}")

@@ -199,7 +199,9 @@ def _run_one(args, room, system, out):
         )
     rows = [r.to_dict() for r in res.rows]
     paper = TABLE1 if room.name == "techtile" else None
-    curves = png_bytes(sweep_curves(rows, res.target_p95, paper))
+    curves = png_bytes(
+        sweep_curves(rows, res.target_p95, paper, target_coverage=res.target_coverage)
+    )
     write_files({out / "sweep.json": res.to_json(indent=1) + "\n",
                  out / "layouts.json": json_text({str(r.M): r.anchors for r in res.rows}),
                  out / "sweep.png": curves})  # fmt: skip
@@ -227,7 +229,7 @@ def _print_table(res, paper) -> None:
     if res.target_coverage > 0:
         goal += f", line of sight >= {100 * res.target_coverage:g} %"
     if res.target_p95 is not None:
-        goal += f" and P95 <= {res.target_p95:g} m"
+        goal += f" and field P95 <= {res.target_p95:g} m"
     if res.recommended is None:
         print(f"no M in the sweep reaches {goal}")
     else:

@@ -1,0 +1,151 @@
+"""A coverage target (placement.coverage.CoverageTarget): layouts below it cost more than
+any layout that meets it, in the range table's costs, the scene draws' cost and the search,
+and the sweep plans every M for its coverage target."""
+
+import math
+
+import numpy as np
+import pytest
+
+from placement.costs import DrawsCost
+from placement.coverage import BELOW_TARGET_COST, CoverageTarget, constrain, visibility
+from placement.rangetable import node_draws, range_table, sight_counts, table_costs
+from placement.simselect import SearchOptions, simulated_select
+from placement.surfaces import candidate_grid
+from simulation import Room
+from simulation.statistics import NO_FIX_COST
+
+ROOM = Room(
+    size=(6.0, 4.0, 3.0),
+    max_order=1,
+    obstacles=[{"min": [2.2, 1.2, 0.0], "max": [3.8, 2.8, 2.4], "name": "cabinet"}],
+)
+NODES = ROOM.grid()[::4]
+CAND = candidate_grid(ROOM, 1.5)
+SEARCH = SearchOptions(draws=1, exact_draws=1, chains=2, evaluations=150, random_starts=4,
+                       neighbours=12, batch=6, patience=4, fine_spacings=(), keep=2)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def table():
+    return range_table(ROOM, CAND, NODES, draws=1, exact_draws=1, rng=3)
+
+
+def test_below_the_target_costs_more_than_any_layout_that_meets_it():
+    target = CoverageTarget(k=2, share=0.5)
+    counts = np.array([[2, 2, 0, 0], [2, 1, 0, 0], [3, 3, 3, 3]])  # 50 %, 25 %, 100 %
+    costs = np.array([2 * NO_FIX_COST + 1e6, 0.001, 0.3])  # the worst allowed, then good ones
+    out = constrain(costs, counts, target)
+    assert out[0] == costs[0] and out[2] == costs[2]  # meeting it: unchanged
+    assert out[1] >= BELOW_TARGET_COST > out[0]
+    # further below costs more, whatever the statistic
+    assert constrain([0.0], [[0, 0, 0, 0]], target)[0] > constrain([9.0], [[2, 0, 0, 0]], target)[0]
+    np.testing.assert_array_equal(constrain(costs, counts, None), costs)
+
+
+NEEDED = [(0.95, 300, 285), (0.95, 20, 19), (0.0, 7, 0), (1.0, 7, 7), (0.5, 7, 4)]
+
+
+@pytest.mark.parametrize(("share", "P", "needed"), NEEDED)
+def test_the_nodes_needed_are_the_share_rounded_up(share, P, needed):
+    assert CoverageTarget(5, share).needed(P) == needed
+
+
+def test_sight_counts_are_the_anchors_each_node_sees(table):
+    rng = np.random.default_rng(0)
+    layouts = np.stack([rng.choice(len(CAND), 5, replace=False) for _ in range(6)])
+    V = visibility(table)
+    expected = np.array([[int(np.sum(V[p, S])) for p in range(len(NODES))] for S in layouts])
+    np.testing.assert_array_equal(sight_counts(table, layouts), expected)
+    assert 0 < np.mean(V) < 1  # the cabinet hides some candidates from some nodes
+
+
+def test_the_table_costs_keep_to_the_target(table):
+    rng = np.random.default_rng(1)
+    layouts = np.stack([rng.choice(len(CAND), 5, replace=False) for _ in range(40)])
+    shares = np.mean(sight_counts(table, layouts) >= 4, axis=1)
+    share = float(np.median(shares))
+    assert 0 < share < 1
+    free = table_costs(table, layouts, "rms")
+    kept = table_costs(table.__class__(**{**table.__dict__,
+                                          "coverage_target": CoverageTarget(4, share)}),
+                       layouts, "rms")  # fmt: skip
+    meets = shares >= share - 1e-12
+    np.testing.assert_array_equal(kept[meets], free[meets])
+    assert np.all(kept[~meets] >= BELOW_TARGET_COST)
+
+
+def test_the_search_keeps_to_a_target_it_can_reach_and_ignores_one_it_cannot(table):
+    M = 5
+    free = simulated_select(ROOM, M, statistic="rms", options=SEARCH, table=table, rng=2)
+    reach = free.coverage.covered  # what M anchors can cover with k = 5
+    assert free.coverage_target is None and "coverage_target" not in free.to_dict()
+    opts = SearchOptions(**{**SEARCH.__dict__, "min_coverage": reach})
+    kept = simulated_select(ROOM, M, statistic="rms", options=opts, table=table, rng=2)
+    assert kept.coverage_target == CoverageTarget(5, reach)
+    assert kept.to_dict()["coverage_target"] == {"k": 5, "share": reach}
+    meets = [np.mean(sight_counts(table, S[None])[0] >= 5) >= reach - 1e-12 for S, _ in kept.optima]
+    costs = [cost for _, cost in kept.optima]
+    assert meets[0] and np.array_equal(kept.indices, kept.optima[0][0])
+    # the optima that meet it first, at their own statistic; a chain that did not reach it after
+    assert meets == sorted(meets, reverse=True)
+    assert all((c < BELOW_TARGET_COST) == m for c, m in zip(costs, meets, strict=True))
+    assert reach < 1.0  # so that a target beyond M anchors' reach exists: the search is free
+    above = SearchOptions(**{**SEARCH.__dict__, "min_coverage": reach + 1 / len(NODES)})
+    same = simulated_select(ROOM, M, statistic="rms", options=above, table=table, rng=2)
+    assert same.coverage_target is None
+    np.testing.assert_array_equal(same.indices, free.indices)
+
+
+def test_the_draws_cost_keeps_to_the_target(table):
+    sets = node_draws(ROOM, NODES, 1, 1, 5)
+    cost = DrawsCost(ROOM, sets, exact_draws=1, seed=4, statistic="rms")
+    rng = np.random.default_rng(2)
+    layouts = [CAND[rng.choice(len(CAND), 5, replace=False)] for _ in range(12)]
+    shares = []
+    for a in layouts:
+        V = visibility(range_table(ROOM, a, sets, exact_draws=1, rng=4, chunk=len(a)))
+        shares.append(float(np.mean(np.sum(V, axis=1) >= 4)))
+    share = float(np.median(shares))
+    kept = DrawsCost(ROOM, sets, exact_draws=1, seed=4, statistic="rms",
+                     coverage_target=CoverageTarget(4, share))  # fmt: skip
+    for a, s in zip(layouts, shares, strict=True):
+        if s >= share:
+            assert kept(a) == cost(a)
+        else:
+            assert kept(a) >= BELOW_TARGET_COST and math.isfinite(cost(a))
+
+
+def test_the_sweep_plans_for_its_coverage_target_unless_the_search_says_otherwise():
+    from placement.anchor_sweep import _kept_to
+
+    assert _kept_to(None, "quick", 0.9).min_coverage == 0.9
+    assert _kept_to(SearchOptions(min_coverage=0.0), "quick", 0.9).min_coverage == 0.0
+    assert _kept_to(SearchOptions(), "default", 0.8) == SearchOptions(min_coverage=0.8)
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, math.nan, "all"])
+def test_a_bad_min_coverage_is_refused_by_name(bad):
+    with pytest.raises(ValueError, match="min_coverage"):
+        SearchOptions(min_coverage=bad)
+
+
+def test_a_plan_keeps_every_phase_to_the_target_and_says_so():
+    from placement.plan import LOCAL_SWARM, Planner
+    from placement.validation import ValidationOptions
+
+    share = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, nodes=NODES,
+                             rng=2).coverage.covered  # fmt: skip
+    opts = SearchOptions(**{**SEARCH.__dict__, "min_coverage": share, "fine_spacings": (0.75,)})
+    planner = Planner(ROOM, 5, cost="rms", search=opts, nodes=NODES, rng=2, progress=False,
+                      swarm=LOCAL_SWARM, validation=ValidationOptions(realizations=0))  # fmt: skip
+    res = planner.solve()
+    target = CoverageTarget(5, share)
+    assert res.settings.search_result["coverage_target"] == target.to_dict()
+    assert planner.coverage_target == target
+    assert planner.draws_cost(1, 1, "finalists", "finalist_nodes").coverage_target == target
+    # the chosen layout meets it at the exact nodes, and so does every finalist scored below
+    # the penalty
+    chosen = range_table(ROOM, res.anchors, NODES, draws=1, exact_draws=1, chunk=5)
+    assert np.mean(np.sum(visibility(chosen), axis=1) >= 5) >= share - 1e-12
+    assert res.cost < BELOW_TARGET_COST and planner.refined
