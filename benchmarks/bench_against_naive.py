@@ -46,6 +46,10 @@ def main() -> None:
         E = np.concatenate([field_errors(room, a, 300, 0.03, d, 7, system=system)
                             for d in range(args.draws)], axis=1)  # fmt: skip
         e = E[0][np.isfinite(E[0])]
+        if e.size == 0:  # no tag has a fix (e.g. corners beyond the signal's reach)
+            emit("against_naive", room=room.name, system=system.name, layout=name, M=len(a),
+                 fixes=int(E[0].size), found=0)  # fmt: skip
+            continue
         rms[name] = float(np.sqrt(np.mean(e * e)))
         emit("against_naive", room=room.name, system=system.name, layout=name, M=len(a),
              median=float(np.median(e)), mean=float(e.mean()), p95=float(np.percentile(e, 95)),
