@@ -120,7 +120,8 @@ def test_pso_options_must_be_pso_options():
 
 def test_cli_search_options_are_checked(tmp_path, capsys):
     for opt, v in (("--search-starts", "-1"), ("--search-spacing", "0"),
-                   ("--search-realizations", "0"), ("--search-spacing", "1e-4")):  # fmt: skip
+                   ("--search-realizations", "0"), ("--search-spacing", "1e-4"),
+                   ("--min-coverage", "1.5"), ("--min-coverage", "-0.1")):  # fmt: skip
         assert main(["plan", opt, v, "--out", str(tmp_path / "o")]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and opt in err, err
