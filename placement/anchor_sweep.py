@@ -162,6 +162,30 @@ def recommend(
     return None
 
 
+def _targets(target_p95, target_availability, target_coverage) -> tuple:
+    """The sweep's targets, checked (:func:`sweep`)."""
+    if target_p95 is not None:
+        target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")
+    target_availability = checks.real(
+        "target_availability", target_availability, low=0.0, high=1.0, low_open=True
+    )
+    target_coverage = checks.real("target_coverage", target_coverage, low=0.0, high=1.0)
+    return target_p95, target_availability, target_coverage
+
+
+def _plan_each(planners, table, on_row) -> list[SweepRow]:
+    """Each planner's plan on the shared ``table``, a row per M (``on_row`` after each)."""
+    rows = []
+    for planner in planners:
+        t = time.perf_counter()
+        planner.table = table
+        res = planner.solve()
+        rows.append(_row(planner.M, res, time.perf_counter() - t))
+        if on_row is not None:
+            on_row(planner.M, rows[-1])
+    return rows
+
+
 def _shared_table(first, most: int, seed: int):
     """The range table the sweep's plans share, built as the plan of ``first`` (a
     :class:`placement.Planner`) builds it; None for a cost without a table search."""
@@ -236,12 +260,9 @@ def sweep(
     counts = _counts(anchors)
     if on_row is not None and not callable(on_row):
         raise ValueError(f"on_row: must be a callable on_row(M, row) or None, got {on_row!r}")
-    if target_p95 is not None:
-        target_p95 = checks.real("target_p95", target_p95, low=0.0, low_open=True, unit="m")
-    target_availability = checks.real(
-        "target_availability", target_availability, low=0.0, high=1.0, low_open=True
+    target_p95, target_availability, target_coverage = _targets(
+        target_p95, target_availability, target_coverage
     )
-    target_coverage = checks.real("target_coverage", target_coverage, low=0.0, high=1.0)
     search = _kept_to(search, effort, target_coverage)
     kw = {"system": system, "cost": cost, "initial": initial, "search": search, "swarm": swarm,
           "finalists": finalists, "validation": validation, "effort": effort, "nodes": nodes,
@@ -252,14 +273,7 @@ def sweep(
     t0 = time.perf_counter()
     table = _shared_table(first, max(counts), seed)
     t_table = time.perf_counter() - t0
-    rows = []
-    for planner in planners:
-        t = time.perf_counter()
-        planner.table = table
-        res = planner.solve()
-        rows.append(_row(planner.M, res, time.perf_counter() - t))
-        if on_row is not None:
-            on_row(planner.M, rows[-1])
+    rows = _plan_each(planners, table, on_row)
     return SweepResult(
         rows=tuple(rows),
         recommended=recommend(rows, target_p95, target_availability, target_coverage),

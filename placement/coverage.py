@@ -126,13 +126,15 @@ def constrain(costs, counts, target: CoverageTarget | None) -> np.ndarray:
     return np.where(short > 0, BELOW_TARGET_COST * (1.0 + short / P) + costs, costs)
 
 
-def visibility(table, draw: int = 0) -> np.ndarray:
+def visibility(table, draw: int = 0, columns=None) -> np.ndarray:
     """(P, N) bool: node p of the table's draw ``draw`` sees candidate j: nothing blocks the
-    direct path, and it lies within the signal's reach and beyond its near limit."""
+    direct path, and it lies within the signal's reach and beyond its near limit. With
+    ``columns`` (an index array of shape S), (P, *S): those candidates only."""
     c = table.room.speed_of_sound
-    d = table.distances[draw]
+    cols = slice(None) if columns is None else columns
+    d = table.distances[draw][:, cols]
     reach = (d >= table.system.near_limit(c)) & (d <= table.system.reach(c))
-    return table.line_of_sight[draw] & reach
+    return table.line_of_sight[draw][:, cols] & reach
 
 
 def covered_share(V: np.ndarray, indices, k: int) -> float:

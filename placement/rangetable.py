@@ -366,7 +366,7 @@ def sight_counts(table: RangeTable, layouts) -> np.ndarray:
     """(L, P) the anchors of each layout (L, M) of candidates that each node of the table's
     first draw sees in line of sight and reach (:func:`placement.coverage.visibility`)."""
     S = _layout_indices(table, layouts)
-    return np.sum(visibility(table)[:, S], axis=-1).T
+    return np.sum(visibility(table, columns=S), axis=-1).T  # the layouts' columns only
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

@@ -73,6 +73,30 @@ def register(sub) -> None:
         action="store_true",
         help="no starting layouts: an unseeded swarm of random particles (the paper's setting)",
     )
+    _add_search_arguments(p)
+    p.add_argument("--seed", type=int, default=0, help="random seed (0)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        help="local worker processes (0: one per available core)",
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://...)")
+    p.add_argument("--checkpoint", metavar="PATH", help="checkpoint file; resumes if present")
+    p.add_argument(
+        "--eval-timeout",
+        type=float,
+        metavar="SECONDS",
+        help="a particle evaluation taking longer costs inf (default: no limit)",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--out", metavar="DIR", default="anchorplan-out", help="output folder")
+    add_system_arguments(p)
+    p.set_defaults(func=run)
+
+
+def _add_search_arguments(p) -> None:
+    """The flags of the range-table search and of the finalists (:func:`plan_options`)."""
     p.add_argument("--search-spacing", type=float, help="candidate spacing of the search, m")
     p.add_argument("--search-chains", type=int, help="independent search chains")
     p.add_argument("--search-evaluations", type=int, help="table layouts scored per chain")
@@ -100,25 +124,6 @@ def register(sub) -> None:
         type=int,
         help="of those, draws at the exact nodes and planned points (the preset's: all)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (0)")
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=0,
-        help="local worker processes (0: one per available core)",
-    )
-    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://...)")
-    p.add_argument("--checkpoint", metavar="PATH", help="checkpoint file; resumes if present")
-    p.add_argument(
-        "--eval-timeout",
-        type=float,
-        metavar="SECONDS",
-        help="a particle evaluation taking longer costs inf (default: no limit)",
-    )
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--out", metavar="DIR", default="anchorplan-out", help="output folder")
-    add_system_arguments(p)
-    p.set_defaults(func=run)
 
 
 def _connect(address: str, stack: contextlib.ExitStack):
