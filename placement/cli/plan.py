@@ -317,6 +317,9 @@ def _print_result(res, args) -> None:
     elif share and cover:
         print(f"coverage target {100 * share:g} %: not applied, {res.settings.M} anchors "
               f"cover {100 * cover['covered']:.1f} % at most found")  # fmt: skip
+    elif share and search:
+        print(f"coverage target {100 * share:g} %: met by every layout (every node sees every "
+              "candidate point in line of sight and reach)")  # fmt: skip
     for s in res.initial:
         table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
         print(f"  initial {s.name:<12} swarm cost {s.cost:.4g}{table}")
