@@ -15,7 +15,9 @@ by the system. One JSON line per number of anchors in sight: the tags, the share
 more than ``--off`` m off, the verified share; then one line on the fixes that are off:
 the share that rest on a hidden anchor whose range is shorter than its direct distance by
 more than 0.1 m (a range no path explains: the receiver picked noise before any path
-arrived); then the field figure of all of them (median, mean, P95 and RMS of the error,
+arrived); one on why they are off (fewer than 5 direct ranges; 5 or more whose own fix is
+off, their anchors in a row; 5 or more that fix the tag, another set kept); then the
+field figure of all of them (median, mean, P95 and RMS of the error,
 the verified share and the share of verified fixes more than 0.5 m off).
 """
 
@@ -30,7 +32,7 @@ from _common import emit
 
 from placement.cli.common import plan_system
 from placement.validation import _mounted_ranges, random_nodes
-from simulation import Room, streams
+from simulation import Room, locate, streams
 from simulation.polyhedral import line_of_sight
 
 
@@ -42,6 +44,28 @@ def _scene(args):
     return room, plan_system(folder, args.system), anchors
 
 
+#: why a fix is off (:func:`_causes`)
+CAUSES = ("fewer_than_5_direct", "direct_set_off", "another_set_kept")
+
+
+def _causes(room, anchors, nodes, excess, R, off) -> dict:
+    """How many of the fixes off at ``nodes`` (n, 3) had fewer than 5 direct ranges
+    (within 5 cm of the distance: ``excess`` (n, M) = range − distance), how many had 5 or
+    more that fix the tag more than ``off`` m off (least squares started at the tag), and
+    how many had 5 or more that fix it but the solver kept another set."""
+    out = dict.fromkeys(CAUSES, 0)
+    region = (np.zeros(3), np.asarray(room.size, dtype=float))
+    for p in range(len(nodes)):
+        direct = np.abs(excess[p]) < 0.05  # NaN compares False
+        if direct.sum() < 5:
+            out["fewer_than_5_direct"] += 1
+            continue
+        x = locate(anchors, np.where(direct, R[p], np.nan)[None], region=region, bounded=True,
+                   x0=nodes[p][None])[0]  # fmt: skip
+        out["direct_set_off" if np.linalg.norm(x - nodes[p]) > off else "another_set_kept"] += 1
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("result_dir")
@@ -51,7 +75,7 @@ def main() -> None:
     ap.add_argument("--off", type=float, default=0.3, help="a fix this far off is wrong, m")
     args = ap.parse_args()
     room, system, anchors = _scene(args)
-    seen, error, verified, short = [], [], [], []
+    seen, error, verified, short, causes = [], [], [], [], []
     for d in range(args.draws):
         nodes = random_nodes(room, 300, streams.stream(0, 0, d))
         R = _mounted_ranges(room, system, anchors, nodes, 0.03, d, 0, None, 1)
@@ -62,6 +86,8 @@ def main() -> None:
         error.append(np.linalg.norm(fix.x - nodes, axis=-1))
         verified.append(fix.verified)
         short.append(np.any(~los & (dist - R > 0.1), axis=1))  # NaN compares False
+        off = np.linalg.norm(fix.x - nodes, axis=-1) > args.off
+        causes.append(_causes(room, anchors, nodes[off], R[off] - dist[off], R[off], args.off))
     seen, error, verified, short = map(np.concatenate, (seen, error, verified, short))
     off = error > args.off  # NaN (no fix) compares False
     found = error[np.isfinite(error)]
@@ -72,6 +98,8 @@ def main() -> None:
     emit("fix_tail_off", room=room.name, system=system.name, tags=int(seen.size),
          off=float(off.mean()), off_with_short_hidden_range=float(np.mean(short[off]))
          if off.any() else 0.0)  # fmt: skip
+    emit("fix_tail_causes", room=room.name, system=system.name,
+         **{k: int(sum(c[k] for c in causes)) for k in CAUSES})  # fmt: skip
     wrong = np.mean(verified & (error > 0.5)) / max(verified.mean(), 1e-12)
     emit("fix_field", room=room.name, system=system.name, tags=int(error.size),
          found=int(found.size), median=float(np.median(found)), mean=float(found.mean()),

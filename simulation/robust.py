@@ -34,7 +34,12 @@ schemes (Casas et al., 2006):
    anchors agree without a contradiction, the least contradicted minimal set whose 4
    ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is the fix when it is
    less contradicted than the fix so far, or as little and with a smaller T;
-5. the fix is the least-squares position on the anchors kept.
+5. the fix grows (:func:`_grow`): each heard anchor left out whose range is within
+   :data:`LOOSE` of its distance from the fix, the nearest first, joins it when the fix on
+   the larger set still passes the test with no contradiction (a dropping step or the
+   tight refinement can leave out a direct range that mounting error put a few
+   centimetres off); the growing stops after :data:`GROW_TRIES` refusals;
+6. the fix is the least-squares position on the anchors kept.
 
 A fix's contradictions are its ranges shorter than their distance by more than
 :data:`SHORT` (no path is shorter than the direct one) and, where the positioning knows the
@@ -107,6 +112,8 @@ MISSES = 2
 #: the largest normalized residual T of a minimal set taken where no 5 anchors agree: its 4
 #: ranges agree to about 7 cm (anchors are mounted within centimetres of the plan)
 MINIMAL_T = 200.0
+#: the anchors step 5 may try to add to a fix and refuse before it stops
+GROW_TRIES = 2
 #: a bound no count of contradictions reaches
 INFINITE = 1 << 30
 #: the largest position dilution of precision of the anchors of a verified fix: 5 nearly
@@ -178,7 +185,7 @@ def robust_rows(
     quality,
     geo,
 ):  # pragma: no cover - compiled
-    """Steps 2–4 of the module docstring for every row whose least-squares fix is in xs
+    """Steps 2–5 of the module docstring for every row whose least-squares fix is in xs
     (B, 3), costs (B,), status (B,) (rows with status < 0 have no fix and are left); the
     anchors kept are written into used (B, M) and the quality into quality (B,) (``bias``
     (M + 1,) :func:`bias_scales`, ``alert`` the alert limit in m); ``geo``
@@ -224,11 +231,55 @@ def robust_rows(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
                 gtol, sigma, thr, loose, short, used[b], work, geo,
             )  # fmt: skip  # step 4
+        if n >= 4:
+            T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
+                                xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, geo,
+                                trial, xt, score)  # fmt: skip  # step 5
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
         quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, sigma * bias[n - 3], alert,
                               rho, work)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
+          thr, loose, short, used, work, geo, trial, xt, seen):  # fmt: skip  # pragma: no cover
+    """Step 5 of the module docstring, in place on the fix x (3,) with the normalized
+    residual T of its n anchors ``used`` (M,): each heard anchor left out whose range in
+    rho0 (M,) is within ``loose`` m of its distance from x, the nearest first, is added
+    when the fix on the larger set still passes the test (``thr``) with nothing
+    contradicting it (``short``, ``geo``: :func:`_contradictions`); it stops after
+    :data:`GROW_TRIES` refusals (``trial`` (M,), ``xt`` (3,), ``seen`` (M,): scratch).
+    Returns (T, n, iterations)."""
+    M = rho0.shape[0]
+    for j in range(M):
+        seen[j] = 1.0 if used[j] or rho0[j] != rho0[j] else 0.0
+    refused = 0
+    while refused < GROW_TRIES:
+        k, best = -1, loose
+        for j in range(M):
+            e = abs(_distance(x, ab[j]) - rho0[j]) if seen[j] == 0.0 else math.inf
+            if e <= best:
+                k, best = j, e
+        if k < 0:
+            break
+        seen[k] = 1.0
+        for j in range(M):
+            trial[j] = rho0[j] if used[j] or j == k else np.nan
+        xt[:] = x
+        c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+                             *work)  # fmt: skip
+        iters += it
+        Tk = 2.0 * c / (sigma * sigma)
+        if Tk <= thr[n - 2] and _contradictions(ab, rho0, trial, xt, short, loose, geo,
+                                                0) == 0:  # fmt: skip
+            used[k] = True
+            x[:] = xt
+            T, n = Tk, n + 1
+        else:
+            refused += 1
+    return T, n, iters
 
 
 @numba.njit(cache=True)

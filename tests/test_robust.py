@@ -534,3 +534,32 @@ def test_a_receiver_of_decimetres_cannot_vouch_for_a_fix_to_half_a_metre():
     )  # fmt: skip
     assert fine.quality[0] == VERIFIED and coarse.quality[0] == UNVERIFIED
     assert _protection_level(a, x, sigma=0.1) > 0.5 >= _protection_level(a, x)
+
+
+def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not():
+    # step 5 from a fix on 4 direct anchors: the fifth direct range (2 cm of mounting
+    # error) joins it; an echo 15 cm long, within the loose inlier distance, fails the test;
+    # an echo of a metre is not tried
+    from simulation.least_squares import scratch
+    from simulation.polyhedral import NO_MAP
+    from simulation.robust import LOOSE, SHORT, _grow
+
+    tag = np.array([3.0, 1.5, 1.0])
+    a = ANCHORS[:7]
+    rho = np.linalg.norm(a - tag, axis=1) + np.array([0, 0, 0, 0, 0.02, 0.15, 1.0])
+    four = rho.copy()
+    four[4:] = np.nan
+    x = locate(a, four[None], region=REGION, bounded=True)[0].copy()
+    used = np.isfinite(four)
+    thr = thresholds(1e-3, len(a))
+    loose, short = max(LOOSE[0], LOOSE[1] * SIGMA), max(SHORT[0], SHORT[1] * SIGMA)
+    T, n, _ = _grow(a, rho, x, 0.0, 4, 0, *REGION, True, np.empty((0, 2)), 30, 1e-10, 1e-12,
+                    1e-10, SIGMA, thr, loose, short, used, scratch(len(a)), NO_MAP,
+                    np.empty(len(a)), np.empty(3), np.empty(len(a)))  # fmt: skip
+    assert n == 5 and used.tolist() == [True] * 5 + [False] * 2
+    assert T <= thr[2] and np.linalg.norm(x - tag) < 0.05
+    # the echo was within reach of the fix, so tried: with it the test fails
+    assert abs(np.linalg.norm(x - a[5]) - rho[5]) <= loose
+    r = np.where(np.arange(len(a)) < 6, rho, np.nan)
+    T_echo = 2 * locate(a, r[None], region=REGION, bounded=True, full_output=True).cost[0]
+    assert T_echo / SIGMA**2 > thr[3]
