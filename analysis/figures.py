@@ -1371,7 +1371,7 @@ def sweep_curves(
     paper's Table I: {M: {"std", "mean", "p95"}}) as hollow markers. Rows with ``covered``
     (the share of the nodes seeing ``coverage_k`` anchors in line of sight and reach) add
     it in % on a right-hand axis, with ``target_coverage`` (a share) as a dotted line."""
-    fig = new_figure((6.4, 4.0), dpi=dpi)
+    fig = new_figure((6.4, 4.8), dpi=dpi)
     ax = fig.add_subplot()
     M = np.array([r["M"] for r in rows], dtype=int)
     styles = (("std", "σ", "o", PALETTE[0]), ("mean", "mean", "s", PALETTE[1]),
@@ -1399,7 +1399,9 @@ def sweep_curves(
                               color="grey"))  # fmt: skip
         labels.append("paper, Table I")
     more = _coverage_axis(ax, rows, M, target_coverage)
-    ax.legend(handles + more[0], labels + more[1], fontsize=8)
+    # below the axes: up to ten entries would hide the curves and the coverage's points
+    ax.legend(handles + more[0], labels + more[1], fontsize=8, loc="upper center",
+              bbox_to_anchor=(0.5, -0.13), ncol=3)  # fmt: skip
     ax.set_xlabel("anchors M")
     ax.set_ylabel("Euclidean error (m)")
     ax.set_xticks(M)

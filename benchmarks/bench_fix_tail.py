@@ -53,17 +53,14 @@ def _causes(room, anchors, nodes, excess, R, off) -> dict:
     (within 5 cm of the distance: ``excess`` (n, M) = range − distance), how many had 5 or
     more that fix the tag more than ``off`` m off (least squares started at the tag), and
     how many had 5 or more that fix it but the solver kept another set."""
-    out = dict.fromkeys(CAUSES, 0)
+    direct = np.abs(excess) < 0.05  # NaN compares False
+    few = direct.sum(axis=1) < 5
     region = (np.zeros(3), np.asarray(room.size, dtype=float))
-    for p in range(len(nodes)):
-        direct = np.abs(excess[p]) < 0.05  # NaN compares False
-        if direct.sum() < 5:
-            out["fewer_than_5_direct"] += 1
-            continue
-        x = locate(anchors, np.where(direct, R[p], np.nan)[None], region=region, bounded=True,
-                   x0=nodes[p][None])[0]  # fmt: skip
-        out["direct_set_off" if np.linalg.norm(x - nodes[p]) > off else "another_set_kept"] += 1
-    return out
+    x = locate(anchors, np.where(direct[~few], R[~few], np.nan), region=region, bounded=True,
+               x0=nodes[~few])  # fmt: skip
+    off_alone = np.linalg.norm(x - nodes[~few], axis=-1) > off
+    return {"fewer_than_5_direct": int(few.sum()), "direct_set_off": int(off_alone.sum()),
+            "another_set_kept": int((~off_alone).sum())}  # fmt: skip
 
 
 def main() -> None:

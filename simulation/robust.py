@@ -231,10 +231,9 @@ def robust_rows(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
                 gtol, sigma, thr, loose, short, used[b], work, geo,
             )  # fmt: skip  # step 4
-        if n >= 4:
-            T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
-                                xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, geo,
-                                trial, xt, score)  # fmt: skip  # step 5
+        T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
+                            xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, geo,
+                            trial, xt, score)  # fmt: skip  # step 5 (n ≥ 4 here)
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
