@@ -16,6 +16,12 @@ schemes (Casas et al., 2006):
    linearized fit) are each left out and the position solved again from the current one
    (at most :data:`SUBSET_ITER` iterations); the one whose removal leaves the smaller T is
    dropped;
+   when the test passes but the room's map (below) hides some of the anchors kept from
+   the fix (a range bent round an obstacle's edge can be only centimetres long, so the
+   test passes with it), those anchors are left out and the fix solved again
+   (:func:`_drop_hidden`); it stands when 6 or more anchors remain, pass the test and
+   nothing contradicts it (with 5, one range of redundancy, the set to keep is step 4's
+   choice);
 4. when that ends without 5 consistent anchors (two or more echoes can pull the first fit
    so far that the deleted residuals point at good anchors), or with a contradiction
    (below), search for consensus as RANSAC does (Fischler and Bolles, 1981),
@@ -226,7 +232,14 @@ def robust_rows(
             T, n = best_T, n - 1
             status[b] = best_st
         clean = T <= thr[n - 3] and n >= 5
-        if not (clean and _contradictions(ab, R[b], rho, x, short, loose, geo, 0) == 0):
+        if clean and _contradictions(ab, R[b], rho, x, short, loose, geo, 0) > 0:
+            clean, T, n, iters, st = _drop_hidden(ab, R[b], rho, x, T, n, iters, lo[b], hi[b],
+                                                  bounded, poly, drop_iter, xtol, ftol, gtol,
+                                                  sigma, thr, loose, short, used[b], work, geo,
+                                                  trial, xt)  # fmt: skip  # step 3's end
+            if clean:
+                status[b] = st
+        if not clean:
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
                 gtol, sigma, thr, loose, short, used[b], work, geo,
@@ -239,6 +252,41 @@ def robust_rows(
         nit[b] = iters
         quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, sigma * bias[n - 3], alert,
                               rho, work)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
+                 gtol, sigma, thr, loose, short, used, work, geo, trial, xt):  # fmt: skip
+    # pragma: no cover - compiled
+    """The end of step 3 of the module docstring, on the fix x (3,) that passes the test
+    on the n anchors of rho (M,) (NaN: left out) but that the map ``geo`` contradicts: the
+    kept anchors that do not see x are left out and the fix solved again; when at least 6
+    remain, the new fix passes the test and nothing contradicts it, x, rho and ``used``
+    (M,) take it (``trial`` (M,), ``xt`` (3,): scratch). Returns (clean, T, n, iterations,
+    the solver's status): clean False leaves x, rho and used as they were."""
+    M = rho0.shape[0]
+    m = 0
+    for j in range(M):
+        trial[j] = rho[j]
+        if rho[j] == rho[j]:
+            if sees_near(geo, x, ab[j], GRAZE, False):
+                m += 1
+            else:
+                trial[j] = np.nan
+    if m < 6 or m == n:
+        return False, T, n, iters, 0
+    xt[:] = x
+    c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+                         *work)  # fmt: skip
+    iters += it
+    Tm = 2.0 * c / (sigma * sigma)
+    if Tm > thr[m - 3] or _contradictions(ab, rho0, trial, xt, short, loose, geo, 0) > 0:
+        return False, T, n, iters, st
+    x[:] = xt
+    for j in range(M):
+        rho[j] = trial[j]
+        used[j] = trial[j] == trial[j]
+    return True, Tm, m, iters, st
 
 
 @numba.njit(cache=True)

@@ -362,6 +362,49 @@ def test_echoes_that_agree_at_a_point_hidden_from_their_anchors_are_rejected(tag
     np.testing.assert_allclose(same.x, fix.x, atol=1e-9)
 
 
+def test_a_fix_that_passes_the_test_on_an_anchor_it_cannot_see_leaves_that_anchor_out():
+    # the end of step 3: a range bent round the rack's edge is only 3 cm long, so least squares on
+    # all seven passes the test, but the map hides that anchor from the fix: it is left
+    # out and the six west anchors fix the tag. With five in sight the step leaves the
+    # choice to the consensus search.
+    from simulation.least_squares import scratch
+    from simulation.polyhedral import blocking_map, line_of_sight
+    from simulation.robust import LOOSE, SHORT, _drop_hidden
+
+    tag = np.array([3.0, 5.0, 1.2])
+    west = np.concatenate([WEST, [[3.0, 9.97, 2.9]]])
+    anchors = np.concatenate([west, EAST[:1]])
+    assert line_of_sight(RACK_ROOM, west, tag[None]).all()
+    assert not line_of_sight(RACK_ROOM, EAST[:1], tag[None]).any()
+    rho = np.linalg.norm(anchors - tag, axis=1) + np.array([0, 0, 0, 0, 0, 0, 0.03])
+    box = (np.zeros(3), np.array(RACK_ROOM.size))
+    first = locate(anchors, rho[None], region=box, bounded=True, full_output=True)
+    thr = thresholds(1e-3, len(anchors))
+    T = 2 * first.cost[0] / SIGMA**2
+    assert T <= thr[4]  # the test alone does not see the bent range
+    geo, M = blocking_map(RACK_ROOM), len(anchors)
+    loose, short = max(LOOSE[0], LOOSE[1] * SIGMA), max(SHORT[0], SHORT[1] * SIGMA)
+
+    def drop(r):
+        x, kept, used = first.x[0].copy(), r.copy(), np.isfinite(r)
+        out = _drop_hidden(anchors, r, kept, x, T, int(used.sum()), 0, *box, True,
+                           np.empty((0, 2)), 30, 1e-10, 1e-12, 1e-10, SIGMA, thr, loose, short,
+                           used, scratch(M), geo, np.empty(M), np.empty(3))  # fmt: skip
+        return out, x, kept, used
+
+    (clean, T6, n, _, _), x, kept, used = drop(rho)
+    assert clean and n == 6 and used.tolist() == [True] * 6 + [False]
+    assert np.isnan(kept[6]) and T6 <= thr[3] and np.linalg.norm(x - tag) < 1e-3
+    five = rho.copy()
+    five[0] = np.nan  # 5 west anchors and the hidden one: left to the consensus search
+    (clean, T5, n, _, _), x, kept, used = drop(five)
+    assert not clean and n == 6 and T5 == T and np.array_equal(x, first.x[0])
+    assert used.tolist() == [False] + [True] * 6
+    fix = MAPPED.locate(RACK_ROOM, anchors, rho[None], full_output=True)
+    assert fix.used[0].tolist() == [True] * 6 + [False]
+    assert np.linalg.norm(fix.x[0] - tag) < 1e-3 and fix.quality[0] == _quality(west, fix.x[0])
+
+
 def test_a_room_that_is_not_a_room_is_refused_by_name():
     ranges = np.linalg.norm(WEST - np.array([3.0, 5.0, 1.2]), axis=1)[None]
     with pytest.raises(ValueError, match="room: expected a simulation.Room"):
