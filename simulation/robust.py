@@ -202,6 +202,7 @@ def robust_rows(
     rho, trial = np.empty(M), np.empty(M)
     x, xt, xb = np.empty(3), np.empty(3), np.empty(3)
     score = np.empty(M)
+    fst = np.zeros(1, dtype=np.int64)  # the status of the solve that gave the fix
     drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
     loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
     for b in range(R.shape[0]):
@@ -239,14 +240,16 @@ def robust_rows(
                                                   trial, xt)  # fmt: skip  # step 3's end
             if clean:
                 status[b] = st
+        fst[0] = status[b]
         if not clean:
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, thr, loose, short, used[b], work, geo,
+                gtol, sigma, thr, loose, short, used[b], work, geo, fst,
             )  # fmt: skip  # step 4
         T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
                             xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, geo,
-                            trial, xt, score)  # fmt: skip  # step 5 (n ≥ 4 here)
+                            trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 4 here)
+        status[b] = fst[0]
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
@@ -291,14 +294,15 @@ def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter,
 
 @numba.njit(cache=True)
 def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
-          thr, loose, short, used, work, geo, trial, xt, seen):  # fmt: skip  # pragma: no cover
+          thr, loose, short, used, work, geo, trial, xt, seen,
+          fst):  # fmt: skip  # pragma: no cover
     """Step 5 of the module docstring, in place on the fix x (3,) with the normalized
     residual T of its n anchors ``used`` (M,): each heard anchor left out whose range in
     rho0 (M,) is within ``loose`` m of its distance from x, the nearest first, is added
     when the fix on the larger set still passes the test (``thr``) with nothing
     contradicting it (``short``, ``geo``: :func:`_contradictions`); it stops after
-    :data:`GROW_TRIES` refusals (``trial`` (M,), ``xt`` (3,), ``seen`` (M,): scratch).
-    Returns (T, n, iterations)."""
+    :data:`GROW_TRIES` refusals (``trial`` (M,), ``xt`` (3,), ``seen`` (M,): scratch; the
+    status of the solve that gave the fix into fst (1,)). Returns (T, n, iterations)."""
     M = rho0.shape[0]
     for j in range(M):
         seen[j] = 1.0 if used[j] or rho0[j] != rho0[j] else 0.0
@@ -324,6 +328,7 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
             used[k] = True
             x[:] = xt
             T, n = Tk, n + 1
+            fst[0] = st
         else:
             refused += 1
     return T, n, iters
@@ -358,15 +363,15 @@ def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter,
 
 @numba.njit(cache=True)
 def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-               sigma, thr, loose, short, used, work, geo):  # fmt: skip  # pragma: no cover
+               sigma, thr, loose, short, used, work, geo, fst):  # fmt: skip  # pragma: no cover
     """Step 4 of the module docstring for the ranges rho0 (M,) of anchors ab (M, 3): the
     minimal sets of 4 heard anchors in the order of :func:`_order_key`, each a hypothesis
     scored by its short ranges and its inliers (:func:`_score`); a promising one is refined
     (:func:`_refine`) and checked on the map ``geo`` (:func:`_contradictions`), and the
     first refined set that passes the test with no contradiction ends the search
     (``loose``, ``short``: :data:`LOOSE`, :data:`SHORT` in metres). On success x (3,) and
-    used (M,) hold the best refined fix and its anchors;
-    returns (T, n, iterations)."""
+    used (M,) hold the best refined fix and its anchors, fst (1,) the status of the solve
+    that gave it; returns (T, n, iterations)."""
     M = rho0.shape[0]
     h = 0
     for j in range(M):
@@ -376,9 +381,9 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     order = np.argsort(_order_key(ab, rho0, short))
     c = np.arange(4)
     trial, xt, xm, best_x = np.empty(M), np.empty(3), np.empty(3), np.empty(3)
-    best_short, best_in, best_T = INFINITE, 0, T
-    four = np.empty(M)  # the best minimal set's fix, contradictions, T and ranges
-    four_x, four_short, four_T = np.empty(3), INFINITE, math.inf
+    best_short, best_in, best_T, best_st = INFINITE, 0, T, 0
+    four = np.empty(M)  # the best minimal set's fix, contradictions, T, status and ranges
+    four_x, four_short, four_T, four_st = np.empty(3), INFINITE, math.inf, 0
     for t in range(MORE_HYPOTHESES):
         if t >= HYPOTHESES and (best_short == 0 or (four_short == 0 and four_T <= MINIMAL_T)):
             break  # something uncontradicted: search no further
@@ -394,17 +399,17 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         nshort *= M + 1  # as _contradictions counts them
         if best_short > 0 and nshort <= four_short:  # no uncontradicted set of 5 yet
-            four_short, four_T, iters = _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short,
-                                                 four_T, iters, lo, hi, bounded, poly,
-                                                 max_iter, xtol, ftol, gtol, sigma, short,
-                                                 loose, work, geo)  # fmt: skip
+            four_short, four_T, iters, four_st = _minimal(
+                ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo,
+                hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
+            )  # fmt: skip
         if inl >= 5 and _better(nshort, inl, best_short, best_in):
-            Tk, m, it = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
-                                poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
+            Tk, m, it, st = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
+                                    poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
             nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, best_short)
             if m >= 5 and _better(nshort, m, best_short, best_in):
-                best_short, best_in, best_T = nshort, m, Tk
+                best_short, best_in, best_T, best_st = nshort, m, Tk, st
                 best_x[:] = xt
                 for j in range(M):
                     used[j] = trial[j] == trial[j]
@@ -414,16 +419,19 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             break
     if best_in >= 5 and best_short == 0:
         x[:] = best_x
+        fst[0] = best_st
         return best_T, best_in, iters
     if best_in >= 5:
         now, T, n = best_short, best_T, best_in  # a set of 5 that something contradicts
         x[:] = best_x
+        fst[0] = best_st
     else:
         for j in range(M):
             trial[j] = rho0[j] if used[j] else np.nan
         now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)  # the fix so far
     if four_T <= MINIMAL_T and (four_short < now or (four_short == now == 0 and four_T < T)):
         x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
+        fst[0] = four_st
         for j in range(M):
             used[j] = four[j] == four[j]
         return four_T, 4, iters
@@ -454,13 +462,13 @@ def _order_key(ab, rho0, short):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
-def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, lo, hi, bounded,
-             poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
+def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo, hi,
+             bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
              geo):  # fmt: skip  # pragma: no cover
     """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
     squares from xt into the scratch xm (3,); kept in four (M,) and four_x (3,) when it has
     fewer contradictions than the best minimal set so far, or as few and a smaller T;
-    returns the best's (contradictions, T, iterations)."""
+    returns the best's (contradictions, T, iterations, the status of its solve)."""
     xm[:] = xt
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
@@ -469,8 +477,8 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, iters, l
     if nshort < four_short or (nshort == four_short and Tm < four_T):
         four[:] = trial
         four_x[:] = xm
-        return nshort, Tm, iters + it
-    return four_short, four_T, iters + it
+        return nshort, Tm, iters + it, st
+    return four_short, four_T, iters + it, four_st
 
 
 @numba.njit(cache=True, inline="always")
@@ -484,17 +492,18 @@ def _refine(ab, rho0, x, trial, loose, tight, lo, hi, bounded, poly, max_iter, x
             gtol, sigma, work):  # fmt: skip  # pragma: no cover - compiled
     """In place on x (3,): the least-squares fix on the anchors whose range is within
     ``loose`` m of x's distance, then on those within ``tight`` m of the new fix (trial
-    (M,) ends holding their ranges, NaN elsewhere); returns (T, anchors, iterations)."""
-    iters, T = 0, math.inf
+    (M,) ends holding their ranges, NaN elsewhere); returns (T, anchors, iterations, the
+    status of the last solve)."""
+    iters, T, st = 0, math.inf, 0
     for tol in (loose, tight):
         m = _inliers(ab, rho0, x, tol, trial)
         if m < 5:
-            return T, m, iters
+            return T, m, iters, st
         c, st, it = lm_solve(ab, trial, x, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                              xtol, ftol, gtol, *work)  # fmt: skip
         iters += it
         T = 2.0 * c / (sigma * sigma)
-    return T, m, iters
+    return T, m, iters, st
 
 
 @numba.njit(cache=True)

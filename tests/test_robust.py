@@ -295,6 +295,22 @@ def test_too_few_anchors_are_refused_and_a_bad_positioning_too():
             Positioning(**kw)
 
 
+def test_a_fix_reports_the_status_of_the_solve_that_gave_it():
+    # two echoes; 3 iterations: least squares on every range stops at the iteration limit,
+    # the consensus search's minimal set is exact and its refined solve ends on a zero
+    # residual: the fix is the refined one, and so is its status
+    tag = np.array([6.6, 1.3, 1.3])
+    rho = np.linalg.norm(ANCHORS - tag, axis=1) + np.array([0, 0, 0, 1.0, 0, 0, 0, 1.2])
+    plain = locate(ANCHORS, rho[None], region=REGION, bounded=True, max_iter=3,
+                   full_output=True)  # fmt: skip
+    assert plain.status[0] == 0 and not plain.converged[0]
+    fix = locate(ANCHORS, rho[None], method="robust", region=REGION, bounded=True,
+                 range_sigma=SIGMA, max_iter=3, full_output=True)  # fmt: skip
+    assert fix.used[0].tolist() == [True, True, True, False, True, True, True, False]
+    assert np.linalg.norm(fix.x[0] - tag) < 1e-9
+    assert fix.converged[0] and fix.status[0] > 0
+
+
 # -- the map check (simulation.map_check) ---------------------------------------------------
 RACK_ROOM = Room(
     size=(10.0, 10.0, 3.0),
@@ -598,7 +614,8 @@ def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not()
     loose, short = max(LOOSE[0], LOOSE[1] * SIGMA), max(SHORT[0], SHORT[1] * SIGMA)
     T, n, _ = _grow(a, rho, x, 0.0, 4, 0, *REGION, True, np.empty((0, 2)), 30, 1e-10, 1e-12,
                     1e-10, SIGMA, thr, loose, short, used, scratch(len(a)), NO_MAP,
-                    np.empty(len(a)), np.empty(3), np.empty(len(a)))  # fmt: skip
+                    np.empty(len(a)), np.empty(3), np.empty(len(a)),
+                    np.zeros(1, np.int64))  # fmt: skip
     assert n == 5 and used.tolist() == [True] * 5 + [False] * 2
     assert T <= thr[2] and np.linalg.norm(x - tag) < 0.05
     # the echo was within reach of the fix, so tried: with it the test fails
