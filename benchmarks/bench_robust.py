@@ -6,6 +6,7 @@ Run:
 
     python benchmarks/bench_robust.py                        # the example rooms
     python benchmarks/bench_robust.py --rooms techtile --receiver paper
+    python benchmarks/bench_robust.py --rooms l-shaped-lab --by-used
 
 For each room (its committed example layout planned for that receiver,
 docs/examples/<room>-recommended/layout.json for the recommended one where it exists, else
@@ -18,7 +19,8 @@ the floor plan. One JSON line per room and solver: median / mean / P95 / σ of t
 the share of verified fixes and of verified fixes more than 0.5 m off, and the seconds per
 fix (the best of ``--repeat`` runs, on one thread; with the fixes' qualities, and so the
 map check) with its ratio to unbounded least squares measured in the same run, and the
-seconds per position alone (no qualities: what the planner's scores ask for).
+seconds per position alone (no qualities: what the planner's scores ask for). With
+``--by-used``, the robust fixes' seconds by how many anchors each fix kept.
 """
 
 from __future__ import annotations
@@ -76,6 +78,11 @@ def main() -> None:
         type=Path,
         help="a layout.json (its anchors) to use instead of the committed example's; one room",
     )
+    ap.add_argument(
+        "--by-used",
+        action="store_true",
+        help="also time the robust fixes grouped by how many anchors each fix kept",
+    )
     args = ap.parse_args()
     if args.layout is not None and len(args.rooms) != 1:
         ap.error(f"--layout: needs exactly one room in --rooms, got {len(args.rooms)}")
@@ -119,6 +126,25 @@ def main() -> None:
                  verified_wrong=float(np.mean(v & (e > 0.5)) / max(v.mean(), 1e-12)),
                  seconds_per_fix=per_fix, ratio_to_ls=per_fix / base,
                  seconds_per_position=bare, position_ratio_to_ls=bare / base)  # fmt: skip
+            if args.by_used and pos.method == "robust":
+                _by_used(room, anchors, R, fix, pos, args, base)
+
+
+def _by_used(room, anchors, R, fix, pos, args, base) -> None:
+    """One line per number of anchors kept: the share of the fixes and the seconds per fix
+    of those rows solved alone (with qualities; the best of ``--repeat``), and its ratio
+    to least squares' seconds per fix over all the fixes."""
+    rows, used = R.reshape(-1, R.shape[-1]), fix.used.reshape(-1, R.shape[-1]).sum(axis=1)
+    for k in np.unique(used):
+        sub = rows[used == k]
+        best = np.inf
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            pos.locate(room, anchors, sub, full_output=True)
+            best = min(best, time.perf_counter() - t0)
+        emit("robust_by_used", room=room.name, receiver=args.receiver, used=int(k),
+             share=float(len(sub) / len(rows)), seconds_per_fix=best / len(sub),
+             ratio_to_ls=best / len(sub) / base)  # fmt: skip
 
 
 if __name__ == "__main__":
