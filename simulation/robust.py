@@ -214,33 +214,17 @@ def robust_rows(
         ab = a[owner[b]]
         rho[:] = R[b]
         x[:] = xs[b]
-        n = 0
-        for j in range(M):
-            n += rho[j] == rho[j]
-        T = 2.0 * costs[b] / (sigma * sigma)
-        iters = nit[b]
-        while T > thr[n - 3] and n > 4:
-            best_T, best_j, best_st, it = _drop_one(
-                ab, rho, x, score, trial, xt, xb, lo[b], hi[b], bounded, poly, drop_iter, xtol,
-                ftol, gtol, sigma, work,
-            )  # fmt: skip
-            iters += it
-            if best_j < 0:
-                break
-            rho[best_j] = np.nan
-            used[b, best_j] = False
-            x[:] = xb
-            T, n = best_T, n - 1
-            status[b] = best_st
+        fst[0] = status[b]
+        T, n, iters = _drop_failing(ab, rho, x, 2.0 * costs[b] / (sigma * sigma), nit[b],
+                                    lo[b], hi[b], bounded, poly, drop_iter, xtol, ftol, gtol,
+                                    sigma, thr, used[b], work, score, trial, xt, xb,
+                                    fst)  # fmt: skip  # step 3
         clean = T <= thr[n - 3] and n >= 5
         if clean and _contradictions(ab, R[b], rho, x, short, loose, geo, 0) > 0:
-            clean, T, n, iters, st = _drop_hidden(ab, R[b], rho, x, T, n, iters, lo[b], hi[b],
-                                                  bounded, poly, drop_iter, xtol, ftol, gtol,
-                                                  sigma, thr, loose, short, used[b], work, geo,
-                                                  trial, xt)  # fmt: skip  # step 3's end
-            if clean:
-                status[b] = st
-        fst[0] = status[b]
+            clean, T, n, iters = _drop_hidden(ab, R[b], rho, x, T, n, iters, lo[b], hi[b],
+                                              bounded, poly, drop_iter, xtol, ftol, gtol, sigma,
+                                              thr, loose, short, used[b], work, geo, trial, xt,
+                                              fst)  # fmt: skip  # step 3's end
         if not clean:
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
@@ -258,15 +242,43 @@ def robust_rows(
 
 
 @numba.njit(cache=True)
+def _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+                  sigma, thr, used, work, score, trial, xt, xb, fst):  # fmt: skip
+    # pragma: no cover - compiled
+    """Step 3 of the module docstring, in place on the fix x (3,) of the heard ranges rho
+    (M,) with normalized residual T: while the test (``thr``) fails and more than 4 remain,
+    :func:`_drop_one` leaves one out (NaN in rho, False in ``used`` (M,)) and its status
+    goes into fst (1,) (``score``, ``trial``, ``xt``, ``xb``: scratch). Returns (T, n,
+    iterations)."""
+    n = 0
+    for j in range(rho.shape[0]):
+        n += rho[j] == rho[j]
+    while T > thr[n - 3] and n > 4:
+        best_T, best_j, best_st, it = _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi,
+                                                bounded, poly, max_iter, xtol, ftol, gtol,
+                                                sigma, work)  # fmt: skip
+        iters += it
+        if best_j < 0:
+            break
+        rho[best_j] = np.nan
+        used[best_j] = False
+        x[:] = xb
+        T, n = best_T, n - 1
+        fst[0] = best_st
+    return T, n, iters
+
+
+@numba.njit(cache=True)
 def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
-                 gtol, sigma, thr, loose, short, used, work, geo, trial, xt):  # fmt: skip
+                 gtol, sigma, thr, loose, short, used, work, geo, trial, xt, fst):  # fmt: skip
     # pragma: no cover - compiled
     """The end of step 3 of the module docstring, on the fix x (3,) that passes the test
     on the n anchors of rho (M,) (NaN: left out) but that the map ``geo`` contradicts: the
     kept anchors that do not see x are left out and the fix solved again; when at least 6
-    remain, the new fix passes the test and nothing contradicts it, x, rho and ``used``
-    (M,) take it (``trial`` (M,), ``xt`` (3,): scratch). Returns (clean, T, n, iterations,
-    the solver's status): clean False leaves x, rho and used as they were."""
+    remain, the new fix passes the test and nothing contradicts it, x, rho, ``used`` (M,)
+    and fst (1,) (its solve's status) take it (``trial`` (M,), ``xt`` (3,): scratch).
+    Returns (clean, T, n, iterations): clean False leaves x, rho, used and fst as they
+    were."""
     M = rho0.shape[0]
     m = 0
     for j in range(M):
@@ -277,19 +289,20 @@ def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter,
             else:
                 trial[j] = np.nan
     if m < 6 or m == n:
-        return False, T, n, iters, 0
+        return False, T, n, iters
     xt[:] = x
     c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                          *work)  # fmt: skip
     iters += it
     Tm = 2.0 * c / (sigma * sigma)
     if Tm > thr[m - 3] or _contradictions(ab, rho0, trial, xt, short, loose, geo, 0) > 0:
-        return False, T, n, iters, st
+        return False, T, n, iters
     x[:] = xt
+    fst[0] = st
     for j in range(M):
         rho[j] = trial[j]
         used[j] = trial[j] == trial[j]
-    return True, Tm, m, iters, st
+    return True, Tm, m, iters
 
 
 @numba.njit(cache=True)

@@ -405,15 +405,16 @@ def test_a_fix_that_passes_the_test_on_an_anchor_it_cannot_see_leaves_that_ancho
         x, kept, used = first.x[0].copy(), r.copy(), np.isfinite(r)
         out = _drop_hidden(anchors, r, kept, x, T, int(used.sum()), 0, *box, True,
                            np.empty((0, 2)), 30, 1e-10, 1e-12, 1e-10, SIGMA, thr, loose, short,
-                           used, scratch(M), geo, np.empty(M), np.empty(3))  # fmt: skip
+                           used, scratch(M), geo, np.empty(M), np.empty(3),
+                           np.zeros(1, np.int64))  # fmt: skip
         return out, x, kept, used
 
-    (clean, T6, n, _, _), x, kept, used = drop(rho)
+    (clean, T6, n, _), x, kept, used = drop(rho)
     assert clean and n == 6 and used.tolist() == [True] * 6 + [False]
     assert np.isnan(kept[6]) and T6 <= thr[3] and np.linalg.norm(x - tag) < 1e-3
     five = rho.copy()
     five[0] = np.nan  # 5 west anchors and the hidden one: left to the consensus search
-    (clean, T5, n, _, _), x, kept, used = drop(five)
+    (clean, T5, n, _), x, kept, used = drop(five)
     assert not clean and n == 6 and T5 == T and np.array_equal(x, first.x[0])
     assert used.tolist() == [False] + [True] * 6
     fix = MAPPED.locate(RACK_ROOM, anchors, rho[None], full_output=True)
