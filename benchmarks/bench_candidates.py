@@ -78,6 +78,7 @@ def validation_figures(room, anchors, seed) -> dict:
     return {
         "std": v["std"],
         "p95": v["p95"],
+        "mean": v["mean"],
         "held_out_grid": v["held_out"]["grid"]["std"],
         "held_out_random": v["held_out"]["random"]["std"],
         "mounting": v["mounting"]["std"],

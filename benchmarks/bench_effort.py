@@ -116,6 +116,18 @@ def main() -> None:
     )
     ap.add_argument("--search-exact-draws", type=int, metavar="N",
                     help="a variant: the preset's range table with N exact draws")  # fmt: skip
+    ap.add_argument(
+        "--fine-optima",
+        type=int,
+        metavar="N",
+        help="a variant: the preset's search refining the N best swarm layouts",
+    )
+    ap.add_argument(
+        "--finalist-draws",
+        type=int,
+        metavar="N",
+        help="a variant: the preset's finalists scored on N fresh draws",
+    )
     args = ap.parse_args()
     if args.summary:
         summary(read_lines(args.summary))
@@ -124,13 +136,20 @@ def main() -> None:
     from placement.workers import WorkerPool
 
     preset, variant = effort_options(args.effort), {}
-    if args.finalist_exact_draws is not None:
-        variant["finalists"] = dataclasses.replace(
-            preset.finalists, exact_draws=args.finalist_exact_draws
-        )
+    finalists = {
+        k: v
+        for k, v in (("exact_draws", args.finalist_exact_draws), ("draws", args.finalist_draws))
+        if v is not None
+    }
+    if finalists:
+        variant["finalists"] = dataclasses.replace(preset.finalists, **finalists)
     table = {
         k: v
-        for k, v in (("draws", args.search_draws), ("exact_draws", args.search_exact_draws))
+        for k, v in (
+            ("draws", args.search_draws),
+            ("exact_draws", args.search_exact_draws),
+            ("fine_optima", args.fine_optima),
+        )
         if v is not None
     }
     if table:

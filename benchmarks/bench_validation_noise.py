@@ -15,6 +15,12 @@ draws) and with the validation noise averaged out (each layout's mean σ).
 Run: python benchmarks/bench_validation_noise.py [--anchors 8] [--validations 5]
      [--workers 2] > validation_noise.jsonl
 Table: python benchmarks/bench_validation_noise.py --summary validation_noise.jsonl
+
+``--layouts RUNS.jsonl [...]`` validates instead the distinct layouts of finished
+``bench_effort.py`` runs at each M of ``--anchors``, under validation seeds
+``--first-validation`` … (one line per layout and validation seed, ``bench:
+"layout_validation"``, with the run seeds that returned the layout); ``--summary`` then
+prints each layout's σ, P95 and mean error averaged over the validation seeds.
 """
 
 import json
@@ -53,14 +59,72 @@ def summary(paths: list[str]) -> None:
               f"| {100 * spread(means):.1f} % |")  # fmt: skip
 
 
+def layouts_summary(rows: list[dict]) -> None:
+    """Per M: each distinct layout's runs and its σ, P95 and mean error averaged over the
+    validation seeds, from the lowest σ up."""
+    print("| M | runs (seeds) | σ (m) | P95 (m) | mean (m) | validations |")
+    print("|---|---|---|---|---|---|")
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["M"], json.dumps(r["anchors"])), []).append(r)
+
+    def key(item):
+        return item[0][0], np.mean([r["std"] for r in item[1]])
+
+    for (M, _), g in sorted(groups.items(), key=key):
+        seeds = ", ".join(str(s) for s in g[0]["runs"])
+        stats = [np.mean([r[k] for r in g]) for k in ("std", "p95", "mean")]
+        print(f"| {M} | {seeds} | {stats[0]:.4f} | {stats[1]:.3f} | {stats[2]:.3f} | {len(g)} |")
+
+
+def effort_layouts(paths: list[str], M: int) -> list[tuple[list, list[int]]]:
+    """The distinct layouts (to 1 mm) of the ``bench_effort.py`` lines at M in ``paths``,
+    each with the seeds of the runs that returned it, in order of first appearance."""
+    out: list[tuple[list, list[int]]] = []
+    for r in read_lines(paths):
+        if r.get("bench") != "effort" or r["M"] != M:
+            continue
+        a = np.round(np.asarray(r["anchors"]), 3)
+        same = [seeds for b, seeds in out if np.array_equal(np.asarray(b), a)]
+        if same:
+            same[0].append(r["seed"])
+        else:
+            out.append((a.tolist(), [r["seed"]]))
+    return out
+
+
+def validate_runs(args, room) -> None:
+    """The ``--layouts`` mode (module docstring)."""
+    first = args.first_validation
+    with WorkerPool(args.workers) as ex:
+        for M in args.anchors:
+            for anchors, runs in effort_layouts(args.layouts, M):
+                vs = range(first, first + args.validations)
+                calls = [(validation_figures, (room, anchors, v)) for v in vs]
+                for v, r in zip(vs, run_calls(ex, calls), strict=True):
+                    emit("layout_validation", M=M, runs=runs, validation_seed=v,
+                         anchors=anchors, **r)  # fmt: skip
+
+
 def main() -> None:
     ap = runs_parser(__doc__, anchors=[8], seeds_help="saved plans M{M}_s0 … per M")
     ap.add_argument("--validations", type=int, default=5)
+    ap.add_argument("--layouts", metavar="JSONL", nargs="+",
+                    help="validate the distinct layouts of bench_effort.py runs")  # fmt: skip
+    ap.add_argument("--first-validation", type=int, default=100,
+                    help="with --layouts: the first validation seed (100)")  # fmt: skip
     args = ap.parse_args()
     if args.summary:
-        summary(args.summary)
+        rows = read_lines(args.summary)
+        if any(r["bench"] == "layout_validation" for r in rows):
+            layouts_summary([r for r in rows if r["bench"] == "layout_validation"])
+        else:
+            summary(args.summary)
         return
     room = Room.techtile()
+    if args.layouts:
+        validate_runs(args, room)
+        return
     with WorkerPool(args.workers) as ex:
         for M in args.anchors:
             for seed in range(args.seeds):

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import placement
-from placement.anchor_sweep import sweep
+from placement.anchor_sweep import SweepRow, sweep
 from placement.cli import main
-from placement.cli.sweep import parse_counts
+from placement.cli.sweep import parse_counts, row_line
 from placement.plan import LOCAL_SWARM
 from placement.simselect import SearchOptions
 from placement.validation import ValidationOptions
@@ -57,6 +57,20 @@ def test_sweep_rejects_bad_input():
     for bad in ("6-4", "four", "4-", "4,4", "\u0661\u0662"):  # a repeat; Arabic-Indic 12
         with pytest.raises(ValueError, match="--anchors"):
             parse_counts(bad)
+
+
+def test_a_sweep_row_reads_the_field_first_and_the_nodes_without_a_field_check():
+    row = SweepRow(M=10, std=0.021, mean=0.009, p95=0.019, held_out_std=0.3,
+                   held_out_p95=0.4, mounting_std=0.02, mounting_p95=0.05,
+                   anchors=np.zeros((10, 3)), seconds=159.0, availability=1.0,
+                   field_std=0.3, field_mean=0.040, field_p95=0.080, field_median=0.016,
+                   field_verified=0.62)  # fmt: skip
+    line = row_line(row)
+    assert line.startswith("field median 0.016 m, mean 0.040 m, P95 0.080 m, verified 62.0 %")
+    assert line.index("sigma 0.021") > line.index("P95 0.080")
+    no_field = row_line(dataclasses.replace(row, field_median=float("nan")))
+    assert no_field.startswith("mean 0.009 m, sigma 0.021 m, P95 0.019 m, availability 100.00 %")
+    assert "field" not in no_field
 
 
 def test_sweep_cli_bad_input_exit_2(tmp_path, capsys):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import math
 import re
 import time
 
@@ -96,6 +97,25 @@ def parse_counts(text: str) -> list[int]:
     raise ValueError(f"--anchors: expected a range like 4-10 or a list like 4,6,8, got {text!r}")
 
 
+def row_line(row) -> str:
+    """One sweep row as the CLI prints it as it finishes: the field's median, mean and P95
+    (what the recommendation reads) and the verified share first, then σ, P95 and
+    availability at the evaluation nodes; the nodes' mean, σ, P95 and availability without
+    a field check."""
+    nodes = (
+        f"sigma {row.std:.3f} m, P95 {row.p95:.3f} m, availability {100 * row.availability:.2f} %"
+    )
+    if not math.isfinite(row.field_median):
+        return f"mean {row.mean:.3f} m, {nodes}"
+    verified = (
+        f", verified {100 * row.field_verified:.1f} %" if math.isfinite(row.field_verified) else ""
+    )
+    return (
+        f"field median {row.field_median:.3f} m, mean {row.field_mean:.3f} m, "
+        f"P95 {row.field_p95:.3f} m{verified}; nodes {nodes}"
+    )
+
+
 def designs(args, room, system) -> dict[str, object]:
     """The systems of the receiver designs of ``--windows`` × ``--picks`` by label ("20ms-
     first-path"), each ``system`` with that window and pick; {"": system} without
@@ -176,12 +196,7 @@ def _run_one(args, room, system, out):
         print(describe_system(room, system), flush=True)
 
         def report(M, row):
-            print(
-                f"  M = {M:2d}: sigma {row.std:.3f} m, mean {row.mean:.3f} m, "
-                f"P95 {row.p95:.3f} m, availability {100 * row.availability:.2f} % "
-                f"({row.seconds:.0f} s)",
-                flush=True,
-            )
+            print(f"  M = {M:2d}: {row_line(row)} ({row.seconds:.0f} s)", flush=True)
 
         res = sweep(
             room,
