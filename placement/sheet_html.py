@@ -16,14 +16,12 @@ from __future__ import annotations
 
 import html
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from placement.mount import Mount, VerticalFrame
 from simulation.room import Room
-
-if TYPE_CHECKING:  # the sheet's data (placement.sheet) imports this module to render
-    from placement.sheet import Mount, VerticalFrame
 
 #: table rows per printed page
 ROWS_PER_PAGE = 25
