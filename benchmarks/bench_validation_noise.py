@@ -36,10 +36,10 @@ from simulation import Room
 PLANS = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "plan"
 
 
-def summary(paths: list[str]) -> None:
+def summary(rows: list[dict]) -> None:
     """Per M: each layout's σ over the validation seeds (min–max, mean), and the spread of
-    σ over the layouts on their own runs' draws and with the noise averaged out."""
-    rows = read_lines(paths)
+    σ over the layouts on their own runs' draws and with the noise averaged out (the
+    ``validation`` lines of ``rows``)."""
     rows = [r for r in rows if r["bench"] == "validation"]
     print("| M | layout seed: σ min–max (mean) over validation seeds (m) | range / mean "
           "| spread on own draws | spread of mean σ |")  # fmt: skip
@@ -61,7 +61,8 @@ def summary(paths: list[str]) -> None:
 
 def layouts_summary(rows: list[dict]) -> None:
     """Per M: each distinct layout's runs and its σ, P95 and mean error averaged over the
-    validation seeds, from the lowest σ up."""
+    validation seeds, from the lowest σ up (the ``layout_validation`` lines of ``rows``)."""
+    rows = [r for r in rows if r["bench"] == "layout_validation"]
     print("| M | runs (seeds) | σ (m) | P95 (m) | mean (m) | validations |")
     print("|---|---|---|---|---|---|")
     groups: dict[tuple, list[dict]] = {}
@@ -80,17 +81,12 @@ def layouts_summary(rows: list[dict]) -> None:
 def effort_layouts(paths: list[str], M: int) -> list[tuple[list, list[int]]]:
     """The distinct layouts (to 1 mm) of the ``bench_effort.py`` lines at M in ``paths``,
     each with the seeds of the runs that returned it, in order of first appearance."""
-    out: list[tuple[list, list[int]]] = []
+    seeds: dict[tuple, list[int]] = {}  # rounded layout -> run seeds, in insertion order
     for r in read_lines(paths):
-        if r.get("bench") != "effort" or r["M"] != M:
-            continue
-        a = np.round(np.asarray(r["anchors"]), 3)
-        same = [seeds for b, seeds in out if np.array_equal(np.asarray(b), a)]
-        if same:
-            same[0].append(r["seed"])
-        else:
-            out.append((a.tolist(), [r["seed"]]))
-    return out
+        if r.get("bench") == "effort" and r["M"] == M:
+            a = np.round(np.asarray(r["anchors"]), 3)
+            seeds.setdefault(tuple(map(tuple, a.tolist())), []).append(r["seed"])
+    return [([list(p) for p in a], s) for a, s in seeds.items()]
 
 
 def validate_runs(args, room) -> None:
@@ -116,10 +112,9 @@ def main() -> None:
     args = ap.parse_args()
     if args.summary:
         rows = read_lines(args.summary)
-        if any(r["bench"] == "layout_validation" for r in rows):
-            layouts_summary([r for r in rows if r["bench"] == "layout_validation"])
-        else:
-            summary(args.summary)
+        for bench, table in (("validation", summary), ("layout_validation", layouts_summary)):
+            if any(r["bench"] == bench for r in rows):
+                table(rows)
         return
     room = Room.techtile()
     if args.layouts:
