@@ -66,7 +66,9 @@ def page(server):
 
 
 def _drag(page, index: int, to) -> None:
-    """Drag anchor ``index`` of the plan view to ``to`` (x, y) m."""
+    """Drag anchor ``index`` of the plan view to ``to`` (x, y) m, from a page with no drag
+    in flight to the drop's answer drawn."""
+    page.wait_for_function("drag === null")
     circle = page.locator(f'.anchor[data-index="{index}"][data-view="plan"] circle')
     box = circle.bounding_box()
     target = page.evaluate(
@@ -81,6 +83,7 @@ def _drag(page, index: int, to) -> None:
     page.mouse.down()
     page.mouse.move(*target, steps=8)
     page.mouse.up()
+    page.wait_for_function("drag === null")
 
 
 def _row(page, index: int) -> str:

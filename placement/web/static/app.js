@@ -225,7 +225,9 @@ function startDrag(ev, svg, f, axes, index, view) {
 }
 
 async function sendMove(point, final) {
-  // one request in flight; the newest point waits for it; the drop always goes
+  // One request in flight; the newest point waits for it; the drop always goes. The error
+  // box is updated at the drop only: shown mid-drag it would push the plan view down under
+  // the pointer, and the drop would land elsewhere.
   const d = drag;
   if (!d) return;
   d.pending = point;
@@ -242,11 +244,14 @@ async function sendMove(point, final) {
     } catch (e) {
       err = e;
     }
+    if (drag !== d) continue; // a newer drag owns the page: its answers are drawn
     if (data) { state = data; fieldResult = null; }
-    if (!d.pending) { showError(err ? err.message : null); render(state); }
+    if (d.pending) continue;
+    if (d.final) showError(err ? err.message : null);
+    render(state);
   }
   d.busy = false;
-  if (d.final) drag = null;
+  if (d.final && drag === d) drag = null;
 }
 
 // -- the side panel ----------------------------------------------------------------------------
