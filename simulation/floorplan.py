@@ -219,7 +219,8 @@ def obstacles_from(items, size, corners=None) -> tuple[Obstacle, ...]:
     """Obstacles from a list of ``{"min": [x, y, z], "max": [...], "name", "absorption",
     "mountable"}`` mappings (or :class:`Obstacle`), checked against the room: each box has
     min < max on every axis, stands in the room (inside the floor plan, between the floor
-    and the ceiling; touching the boundary is allowed, cutting a wall is not)."""
+    and the ceiling; touching the boundary is allowed, cutting a wall is not), and no two
+    overlap (:func:`_check_apart`)."""
     if items is None:
         return ()
     if isinstance(items, Mapping | str | bytes) or not isinstance(items, Iterable):
@@ -258,7 +259,35 @@ def obstacles_from(items, size, corners=None) -> tuple[Obstacle, ...]:
         mountable = checks.flag(f"{what} mountable", item.get("mountable", False))
         _check_inside(what, lo, hi, size, corners)
         out.append(Obstacle(lo, hi, name, alpha, mountable))
+    _check_apart(out)
     return tuple(out)
+
+
+def _check_apart(obstacles: list[Obstacle]) -> None:
+    """Refuse two boxes that share a volume. Each box reflects on all six faces, so where
+    two overlap, the faces of one inside the other and the faces they share would reflect
+    twice: the same solid would sound different from the same solid made of boxes that
+    only touch (their common faces lie inside it and reflect nothing)."""
+    if len(obstacles) < 2:
+        return
+    lo = np.array([o.lo for o in obstacles])
+    hi = np.array([o.hi for o in obstacles])
+    common = np.minimum(hi[:, None], hi[None]) - np.maximum(lo[:, None], lo[None])
+    i, j = np.nonzero(np.triu(np.all(common > 1e-9, axis=-1), k=1))
+    if i.size == 0:
+        return
+    a, b = int(i[0]), int(j[0])
+    c_lo, c_hi = np.maximum(lo[a], lo[b]), np.minimum(hi[a], hi[b])
+
+    def named(k: int) -> str:
+        return f"obstacles[{k}]" + (f" ({obstacles[k].name!r})" if obstacles[k].name else "")
+
+    span = ", ".join(f"{ax} {u:g}–{v:g}" for ax, u, v in zip("xyz", c_lo, c_hi, strict=True))
+    raise ValueError(
+        f"{named(b)}: overlaps {named(a)} in {span} m; allowed: boxes that touch at most "
+        "(describe a solid of another shape as boxes that meet face to face: an overlap "
+        "would reflect twice where the boxes share a face)"
+    )
 
 
 def _check_inside(what: str, lo, hi, size, corners) -> None:

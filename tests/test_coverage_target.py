@@ -43,6 +43,18 @@ def test_below_the_target_costs_more_than_any_layout_that_meets_it():
     np.testing.assert_array_equal(constrain(costs, counts, None), costs)
 
 
+def test_the_cli_reads_a_penalized_cost_as_what_it_means():
+    from placement.cli.common import cost_text
+    from simulation.statistics import row_statistics
+
+    # 1 node of 10 without a fix: the statistic's penalty, read back as its share
+    errors = np.array([[0.1, 0.2, np.nan, 0.1, 0.3, 0.2, 0.1, 0.2, 0.1, 0.1]])
+    assert cost_text(row_statistics("rms", errors)[0]) == "10 % without a fix"
+    below = constrain([0.01], [[0, 5, 5, 5]], CoverageTarget(k=5, share=1.0))[0]
+    assert cost_text(below) == "below the coverage target"
+    assert cost_text(0.5699) == "0.5699" and cost_text(math.nan) == "–"
+
+
 NEEDED = [(0.95, 300, 285), (0.95, 20, 19), (0.0, 7, 0), (1.0, 7, 7), (0.5, 7, 4)]
 
 

@@ -235,6 +235,19 @@ def number(x, spec: str = ".4g") -> str:
     return format("–", ("<" if spec.startswith("<") else ">") + (width or ""))
 
 
+def cost_text(x) -> str:
+    """A planner's cost for the reader: :func:`number`, or what a penalty says instead of
+    its value (a layout below the coverage target, one with nodes without a fix)."""
+    from placement.coverage import BELOW_TARGET_COST
+    from simulation.statistics import NO_FIX_COST
+
+    if x == x and x >= BELOW_TARGET_COST:
+        return "below the coverage target"
+    if x == x and x >= NO_FIX_COST:
+        return f"{100 * (x / NO_FIX_COST - 1):.2g} % without a fix"
+    return number(x)
+
+
 def availability_note(summary: dict) -> str:
     """ ", availability 99.2 % (0.8 % without a fix)" for a summary with an availability."""
     a = summary.get("availability")

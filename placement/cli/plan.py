@@ -12,12 +12,12 @@ from placement.cli.common import (
     add_room_argument,
     add_system_arguments,
     availability_note,
+    cost_text,
     describe_room,
     describe_system,
     json_text,
     load_room,
     load_system,
-    number,
     output_dir,
 )
 from placement.costs import AUTO, COST_NAMES, default_cost
@@ -321,8 +321,8 @@ def _print_result(res, args) -> None:
         print(f"coverage target {100 * share:g} %: met by every layout (every node sees every "
               "candidate point in line of sight and reach)")  # fmt: skip
     for s in res.initial:
-        table = "" if s.table_cost != s.table_cost else f"   table cost {s.table_cost:.4g}"
-        print(f"  initial {s.name:<12} swarm cost {s.cost:.4g}{table}")
+        table = "" if s.table_cost != s.table_cost else f"   table cost {cost_text(s.table_cost)}"
+        print(f"  initial {s.name:<12} swarm cost {cost_text(s.cost)}{table}")
     swarm = res.pso
     extra = {} if swarm is None else swarm.extra
     if extra.get("resumed_from") is not None:
@@ -340,8 +340,8 @@ def _print_result(res, args) -> None:
     for f in res.finalists:
         mark = "*" if array_equal(f["anchors"], res.anchors) else " "
         print(
-            f" {mark}finalist {f['source']:<10} swarm cost {number(f['pso_cost'])}, "
-            f"fresh draws {number(f['cost'])}"
+            f" {mark}finalist {f['source']:<10} swarm cost {cost_text(f['pso_cost'])}, "
+            f"fresh draws {cost_text(f['cost'])}"
         )
     print("anchors (m):")
     for a in res.anchors:
