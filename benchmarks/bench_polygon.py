@@ -17,9 +17,11 @@ One JSON line per result:
    pair of both simulators to the received windows (ours: paths and synthesis; the peer:
    impulse responses at 1 MHz, convolution and resampling), and with the receiver's DSP
    (the same for both, float64) to the ranges; ``speed_ratio`` is the windows' ratio;
-4. ``obstacle_order``: in the lab and the warehouse (examples/warehouse-aisles.toml), the
-   noise-free ranges with 0, 1 and 2 reflections on obstacle faces against the full
-   order: the share of pairs whose range moves by more than 1 cm, and the time per pair.
+4. ``obstacle_order``: in the lab and the warehouse (examples/warehouse-aisles.toml), or
+   the rooms of ``--rooms`` (with ``--system``), the noise-free ranges of a naive layout
+   with 0, 1 and 2 reflections on obstacle faces against the full order: the share of
+   pairs whose range moves by more than 1 cm, the images of one anchor and the time per
+   pair.
 """
 
 import argparse
@@ -149,14 +151,16 @@ def peer(n_nodes: int) -> None:
              speed_ratio_to_ranges=(t_peer + t_dsp) / (t_ours + t_dsp))  # fmt: skip
 
 
-def obstacle_order(n_nodes: int) -> None:
-    for name in ("l-shaped-lab", "warehouse-aisles"):
-        room = Room.from_toml(ROOT / f"examples/{name}.toml")
-        system = System.from_toml(ROOT / f"examples/{name}.toml")  # its [system], if any
+def obstacle_order(n_nodes: int, rooms, system_name=None) -> None:
+    for path in rooms:
+        room = Room.from_toml(path)
+        name = room.name or Path(path).stem
+        # the room file's [system], if any, or the one named
+        system = System.preset(system_name) if system_name else System.from_toml(path)
         a = naive_layout(room, 8)
         p = room.grid()[np.linspace(0, len(room.grid()) - 1, n_nodes).astype(int)]
         full = None
-        for order in (room.max_order, 2, 1, 0):
+        for order in sorted({room.max_order, 2, 1, 0}, reverse=True):
             r = dataclasses.replace(room, obstacle_order=order)
             t0 = time.perf_counter()
             scene = RangingScene(r, a, p, system=system)
@@ -166,7 +170,9 @@ def obstacle_order(n_nodes: int) -> None:
                 full = ranges
             moved = np.abs(np.nan_to_num(ranges, nan=-1) - np.nan_to_num(full, nan=-1)) > 0.01
             paths = compute_paths(r, a, p)
-            emit("polygon", part="obstacle_order", room=name, obstacle_order=order,
+            emit("polygon", part="obstacle_order", room=name, system=system.name,
+                 obstacle_order=order, images=len(images(reflectors(r), a[0], r.max_order,
+                                                         order)[0]),
                  paths_per_pair=float(np.mean(np.sum(paths.amplitude > 0, -1))),
                  share_moved_over_1cm=float(np.mean(moved)),
                  us_per_pair=1e6 * seconds / ranges.size)  # fmt: skip
@@ -176,6 +182,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer nodes and candidates")
     ap.add_argument("--parts", nargs="+", default=["table", "paths", "peer", "obstacle_order"])
+    ap.add_argument(
+        "--rooms",
+        nargs="+",
+        metavar="TOML",
+        default=[ROOT / "examples/l-shaped-lab.toml", ROOT / "examples/warehouse-aisles.toml"],
+        help="the rooms of the obstacle_order part (the lab and the warehouse)",
+    )
+    ap.add_argument("--system", help="the system of the obstacle_order part (a preset; "
+                    "default: each room file's)")  # fmt: skip
     args = ap.parse_args()
     q = args.quick
     if "table" in args.parts:
@@ -185,7 +200,7 @@ def main() -> None:
     if "peer" in args.parts:
         peer(10 if q else 100)
     if "obstacle_order" in args.parts:
-        obstacle_order(30 if q else 120)
+        obstacle_order(30 if q else 120, args.rooms, args.system)
 
 
 if __name__ == "__main__":

@@ -239,6 +239,7 @@ class Planner:
         if self.checkpoint is not None:
             self.store = resume.PhaseStore(self.checkpoint, self.identity())
         self.reach = reach_check(self.room, self.system, self.nodes)
+        image_check(self.room)
         self.find_initial()
         self.run_swarm()
         self.refine()
@@ -505,6 +506,45 @@ def _check_table(table, mount_tolerance: float):
 
 def _degenerate(anchors) -> bool:
     return degeneracy.geometry(anchors) in ("collinear", "coincident")
+
+
+#: the image sources per anchor above which a plan warns that its simulations will be slow:
+#: five times the committed warehouse's (4 097 at order 3), where a pair of an anchor and
+#: a node already costs a quarter of a millisecond
+MANY_IMAGES = 20_000
+
+
+def image_check(room: Room) -> int:
+    """The image sources of an anchor in ``room`` (:func:`simulation.polyhedral.image_count`;
+    0 for a shoebox without obstacles, whose images are all valid and cheap). Logs a warning
+    above :data:`MANY_IMAGES`: every simulation traces every node's paths against them, so
+    the plan will be slow; the counts of each lower ``obstacle_order`` (the reflections a
+    path may have on obstacle faces) are named (what a lower one changes: docs/model.md,
+    "Obstacles")."""
+    from simulation.polyhedral import image_count, reflectors
+
+    if room.is_shoebox and not room.obstacles:
+        return 0
+    n = image_count(room)
+    if n <= MANY_IMAGES:
+        return n
+    lower = " or ".join(
+        f"{image_count(room, k):,} ({k})" for k in range(room.obstacle_order - 1, 0, -1)
+    )
+    hint = (
+        f"; a lower obstacle_order in the room file (the reflections a path may have on "
+        f"obstacle faces) gives {lower}"
+        if lower
+        else ""
+    )
+    logger.warning(
+        "the room has %d reflectors: an anchor has %s image sources up to order %d (%d on "
+        "obstacle faces), more than %s: every simulation traces each node's paths against "
+        "them, and the plan will be slow%s",
+        len(reflectors(room).kind), f"{n:,}", room.max_order, room.obstacle_order,
+        f"{MANY_IMAGES:,}", hint,
+    )  # fmt: skip
+    return n
 
 
 def reach_check(room: Room, system=None, nodes=None) -> dict[str, Any]:

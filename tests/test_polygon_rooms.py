@@ -171,6 +171,40 @@ def test_one_solid_made_of_touching_boxes_sounds_the_same_however_it_is_cut():
     assert not out[0][2].all()  # the counter hides some anchors from some nodes
 
 
+def test_the_images_of_an_anchor_are_the_mirrors_on_the_air_side_and_many_obstacles_warn(
+    caplog,
+):
+    from placement.plan import MANY_IMAGES, image_check
+    from simulation.polyhedral import image_count
+
+    # order 1, an anchor above (3, 3): itself, the 6 room planes and the 3 faces of the box
+    # that face it (its top and the faces at x = 2 and y = 2; its bottom is on the floor)
+    box = [{"min": [1, 1, 0], "max": [2, 2, 1]}]
+    walls = {"west": 0.45, "east": 0.45}  # the default's 1.0 there reflects nothing
+    one = Room(size=(6.0, 6.0, 3.0), max_order=1, obstacles=box, absorption=walls)
+    assert image_count(one) == 10
+    assert image_count(one, 0) == 7  # no reflection on obstacle faces
+    assert image_count(dataclasses.replace(one, absorption={})) == 8  # west, east: α = 1
+    # a room of 25 desks: hundreds of thousands of images at order 3, each lower order fewer
+    desks = [
+        {"min": [1 + 2 * i, 1 + 2 * j, 0], "max": [2 + 2 * i, 1.8 + 2 * j, 0.75]}
+        for i in range(5)
+        for j in range(5)
+    ]
+    office = Room(size=(11.0, 11.0, 3.0), max_order=3, obstacles=desks)
+    counts = [image_count(office, k) for k in range(4)]
+    assert counts == sorted(counts) and counts[3] > MANY_IMAGES >= counts[1]
+    with caplog.at_level("WARNING", logger="placement.plan"):
+        assert image_check(office) == counts[3]
+    assert f"{counts[3]:,} image sources up to order 3" in caplog.text
+    assert f"gives {counts[2]:,} (2) or {counts[1]:,} (1)" in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="placement.plan"):
+        assert 0 < image_check(L_ROOM) <= MANY_IMAGES
+        assert image_check(Room(size=(4.0, 4.0, 3.0))) == 0  # a shoebox: no tracing
+    assert not caplog.text
+
+
 def test_floor_plans_and_obstacles_round_trip_through_toml(tmp_path):
     room = Room.from_corners(
         L_CORNERS,
