@@ -525,11 +525,12 @@ def image_check(room: Room) -> int:
 
     if room.is_shoebox and not room.obstacles:
         return 0
-    n = image_count(room)
+    refl = reflectors(room)
+    n = image_count(room, refl=refl)
     if n <= MANY_IMAGES:
         return n
     lower = " or ".join(
-        f"{image_count(room, k):,} ({k})" for k in range(room.obstacle_order - 1, 0, -1)
+        f"{image_count(room, k, refl):,} ({k})" for k in range(room.obstacle_order - 1, 0, -1)
     )
     hint = (
         f"; a lower obstacle_order in the room file (the reflections a path may have on "
@@ -541,7 +542,7 @@ def image_check(room: Room) -> int:
         "the room has %d reflectors: an anchor has %s image sources up to order %d (%d on "
         "obstacle faces), more than %s: every simulation traces each node's paths against "
         "them, and the plan will be slow%s",
-        len(reflectors(room).kind), f"{n:,}", room.max_order, room.obstacle_order,
+        len(refl.kind), f"{n:,}", room.max_order, room.obstacle_order,
         f"{MANY_IMAGES:,}", hint,
     )  # fmt: skip
     return n

@@ -149,18 +149,20 @@ def images(refl: Reflectors, source, max_order: int, obstacle_order: int):
     return tuple(np.concatenate([o[k] for o in out]) for k in range(4))
 
 
-def image_count(room, obstacle_order: int | None = None) -> int:
+def image_count(room, obstacle_order: int | None = None, refl: Reflectors | None = None) -> int:
     """The valid images (step 2 of the module docstring, the direct path included) of an
     anchor on the ceiling above a point inside the floor plan, with at most ``obstacle_order``
     reflections on obstacle faces (None: the room's): what the paths of every anchor–node
-    pair are traced against, so what a simulation in the room costs."""
+    pair are traced against, so what a simulation in the room costs. ``refl``: the room's
+    :func:`reflectors`, when the caller has them."""
     from shapely import Polygon
 
     c = Polygon(room.corners).representative_point() if room.corners is not None else None
     x, y = (c.x, c.y) if c is not None else (room.size[0] / 2, room.size[1] / 2)
     order = room.obstacle_order if obstacle_order is None else obstacle_order
     source = np.array([x, y, room.size[2] - room.anchor_offset])
-    return len(images(reflectors(room), source, room.max_order, order)[0])
+    refl = reflectors(room) if refl is None else refl
+    return len(images(refl, source, room.max_order, order)[0])
 
 
 @numba.njit(cache=True, inline="always")
