@@ -13,10 +13,11 @@ position in a cut-out corner of an L-shaped room is not in the room.
 Statuses (modelled on scipy ``least_squares``): 1 gradient small, 2 cost change small,
 3 step small, 4 zero residual, 0 iteration limit.
 
-The solve's helpers are compiled into it, and the solve into :func:`lm_rows` (numba's
-``inline="always"``; an inlined function takes its arguments one by one, no ``*args``):
-the loop then knows the scratch arrays apart and runs about a third faster, with the same
-floating-point operations in the same order (the same results, bit for bit).
+The solve's helpers are compiled into it, and the solve into :func:`lm_rows` and the robust
+search's dropping step (:func:`lm_solve_inline`, numba's ``inline="always"``; an inlined
+function takes its arguments one by one, no ``*args``): the loop then knows the scratch
+arrays apart and runs faster, with the same floating-point operations in the same order
+(the same results, bit for bit).
 """
 
 from __future__ import annotations
@@ -110,8 +111,9 @@ def lm_rows(
     r, u, rn, un, xn, step, free = scratch(R.shape[1])
     for b in range(R.shape[0]):
         x[:] = x0[b]
-        cost, st, it = _lm_solve(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly, max_iter,
-                                 xtol, ftol, gtol, r, u, rn, un, xn, step, free)  # fmt: skip
+        cost, st, it = lm_solve_inline(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly,
+                                       max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step,
+                                       free)  # fmt: skip
         xs[b] = x
         costs[b], status[b], nit[b] = cost, st, it
 
@@ -131,17 +133,18 @@ def lm_solve(
     """Solve one position in place in x (3,) from ranges rho (M,) of anchors ab (M, 3)
     (module docstring; r … free: :func:`scratch`); returns (cost ½Σr², status,
     iterations)."""
-    return _lm_solve(ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn,
-                     un, xn, step, free)  # fmt: skip
+    return lm_solve_inline(ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u,
+                           rn, un, xn, step, free)  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")
-def _lm_solve(
+def lm_solve_inline(
     ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step, free
 ):  # pragma: no cover - compiled
-    """:func:`lm_solve`, compiled into its caller: :func:`lm_rows` (its loop then knows the
-    scratch arrays apart) and :func:`lm_solve` itself (one compiled solve for the other
-    callers, which compile faster calling it than holding its loop)."""
+    """:func:`lm_solve`, compiled into its caller: :func:`lm_rows` and the robust search's
+    dropping step (their loops then know the scratch arrays apart) and :func:`lm_solve`
+    itself (one compiled solve for the other callers, which compile faster calling it than
+    holding its loop)."""
     free[:] = True
     if bounded and poly.shape[0] >= 3:
         into_floor_plan(x, poly)

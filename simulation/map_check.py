@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulation.polyhedral import line_of_sight
-from simulation.robust import UNVERIFIED
+from simulation.polyhedral import hidden_anchors
+from simulation.robust import UNVERIFIED, VERIFIED
 
 
 def needs_check(room) -> bool:
@@ -41,12 +41,9 @@ def contradictions(room, layouts, owner, x, used) -> tuple[np.ndarray, np.ndarra
     N, M = used.shape
     hidden = np.zeros((N, M), dtype=bool)
     outside = np.zeros(N, dtype=bool)
-    found = np.all(np.isfinite(x), axis=1)
-    for layout in np.unique(owner[found]):
-        rows = np.flatnonzero(found & (owner == layout))
-        los = line_of_sight(room, layouts[layout], x[rows])
-        hidden[rows] = used[rows] & ~los
-        outside[rows] = ~room.contains(x[rows])
+    rows = np.flatnonzero(np.all(np.isfinite(x), axis=1))
+    hidden[rows] = hidden_anchors(room, layouts, owner[rows], x[rows], used[rows])
+    outside[rows] = ~room.contains(x[rows])
     return hidden, outside
 
 
@@ -56,10 +53,13 @@ def map_check(room, layouts, owner, fix: dict) -> dict:
     docstring), ``layouts`` (L, M, 3) and ``owner`` (N,) as in :func:`contradictions`: the
     same dict with ``quality`` no better than unverified where a fix rests on a hidden anchor
     or lies outside the room."""
-    hidden, outside = contradictions(room, layouts, owner, fix["x"], fix["used"])
-    bad = hidden.any(axis=1) | outside
-    if not bad.any():
+    # only a verified fix can lose its quality: the others are not checked
+    rows = np.flatnonzero(fix["quality"] == VERIFIED)
+    hidden, outside = contradictions(room, layouts, owner[rows], fix["x"][rows],
+                                     fix["used"][rows])  # fmt: skip
+    bad = rows[hidden.any(axis=1) | outside]
+    if not bad.size:
         return fix
     quality = fix["quality"].copy()
-    quality[bad] = np.minimum(quality[bad], UNVERIFIED)
+    quality[bad] = UNVERIFIED
     return {**fix, "quality": quality}

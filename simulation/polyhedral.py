@@ -335,6 +335,34 @@ def _direct_los(nodes, source, kind, normal, d, box, blocking, plan):  # pragma:
     return out
 
 
+@numba.njit(cache=True)
+def _hidden_used(x, layouts, owner, used, kind, normal, d, box, blocking, plan):
+    # pragma: no cover - compiled
+    """(N, M) bool: the segment from point x[i] to anchor j of layout owner[i] is blocked,
+    tested only where used[i, j] (False elsewhere)."""
+    out = np.zeros(used.shape, dtype=np.bool_)
+    for i in range(x.shape[0]):
+        a = layouts[owner[i]]
+        for j in range(used.shape[1]):
+            if used[i, j]:
+                out[i, j] = _blocked(x[i, 0], x[i, 1], x[i, 2], a[j, 0], a[j, 1], a[j, 2], kind,
+                                     normal, d, box, blocking, plan, -1, -1)  # fmt: skip
+    return out
+
+
+def hidden_anchors(room, layouts, owner, points, used) -> np.ndarray:
+    """(N, M) bool: anchor j of layout ``owner[i]`` (layouts (L, M, 3)) is used by point i
+    (points (N, 3), used (N, M)) and something of the room blocks the straight segment
+    between them (as :func:`line_of_sight` tests it; only the used pairs are tested)."""
+    used = np.ascontiguousarray(used, dtype=bool)
+    if room.is_convex and not room.obstacles:
+        return np.zeros(used.shape, dtype=bool)
+    return _hidden_used(np.ascontiguousarray(points, dtype=float),
+                        np.ascontiguousarray(layouts, dtype=float),
+                        np.ascontiguousarray(owner, dtype=np.int64), used,
+                        *blocking_map(room))  # fmt: skip
+
+
 def paths(room, anchors: np.ndarray, nodes: np.ndarray, refl: Reflectors | None = None):
     """The valid paths from anchors (M, 3) to nodes (P, 3) (module docstring, step 3).
 

@@ -39,7 +39,8 @@ schemes (Casas et al., 2006):
    few direct ranges may be among the longest), else the best one is kept; where no 5
    anchors agree without a contradiction, the least contradicted minimal set whose 4
    ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is the fix when it is
-   less contradicted than the fix so far, or as little and with a smaller T;
+   less contradicted than the fix so far, or as little and with a smaller T (the minimal
+   sets are solved for this only once the search has found no such set of 5);
 5. the fix grows (:func:`_grow`): each heard anchor left out whose range is within
    :data:`LOOSE` of its distance from the fix, the nearest first, joins it when the fix on
    the larger set still passes the test with no contradiction (a dropping step or the
@@ -84,7 +85,7 @@ import math
 import numba
 import numpy as np
 
-from simulation.least_squares import linear_fix, lm_solve, residuals, scratch
+from simulation.least_squares import linear_fix, lm_solve, lm_solve_inline, residuals, scratch
 from simulation.polyhedral import sees_near
 
 #: the quality of a fix (:class:`simulation.positioning.PositionFix` ``quality``)
@@ -364,8 +365,7 @@ def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter,
         trial[:] = rho
         trial[j] = np.nan
         xt[:] = x
-        c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-                             *work)  # fmt: skip
+        c, st, it = _solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, work)
         iters += it
         Tj = 2.0 * c / (sigma * sigma)
         if Tj < best_T:
@@ -397,7 +397,19 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     best_short, best_in, best_T, best_st = INFINITE, 0, T, 0
     four = np.empty(M)  # the best minimal set's fix, contradictions, T, status and ranges
     four_x, four_short, four_T, four_st = np.empty(3), INFINITE, math.inf, 0
+    # minimal sets met before any uncontradicted set of 5: solved only if none is found
+    # (their anchors, linear fixes and short ranges; :func:`_settle`)
+    cap = min(HYPOTHESES, h * (h - 1) * (h - 2) * (h - 3) // 24)
+    pend, pend_x = np.empty((cap, 4), np.int64), np.empty((cap, 3))
+    pend_short, npend = np.empty(cap, np.int64), 0
     for t in range(MORE_HYPOTHESES):
+        if t == HYPOTHESES:  # the rule below reads the best minimal set: settle it now
+            four_short, four_T, iters, four_st = _settle(
+                ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x,
+                four_short, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
+                gtol, sigma, short, loose, work, geo,
+            )  # fmt: skip
+            npend = 0
         if t >= HYPOTHESES and (best_short == 0 or (four_short == 0 and four_T <= MINIMAL_T)):
             break  # something uncontradicted: search no further
         trial[:] = np.nan
@@ -411,7 +423,13 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             xt[k] = min(max(xt[k], lo[k]), hi[k])
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         nshort *= M + 1  # as _contradictions counts them
-        if best_short > 0 and nshort <= four_short:  # no uncontradicted set of 5 yet
+        if best_short > 0 and t < HYPOTHESES:  # no uncontradicted set of 5 yet: for later
+            for i in range(4):
+                pend[npend, i] = order[c[i]]
+            pend_x[npend] = xt
+            pend_short[npend] = nshort
+            npend += 1
+        elif best_short > 0 and nshort <= four_short:
             four_short, four_T, iters, four_st = _minimal(
                 ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo,
                 hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
@@ -420,7 +438,9 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             Tk, m, it, st = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
                                     poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
             iters += it
-            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, best_short)
+            # with no more anchors than the best's, only fewer contradictions win
+            bound = best_short if m > best_in else best_short - 1
+            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, bound)
             if m >= 5 and _better(nshort, m, best_short, best_in):
                 best_short, best_in, best_T, best_st = nshort, m, Tk, st
                 best_x[:] = xt
@@ -434,6 +454,11 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         x[:] = best_x
         fst[0] = best_st
         return best_T, best_in, iters
+    four_short, four_T, iters, four_st = _settle(
+        ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
+        four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short,
+        loose, work, geo,
+    )  # fmt: skip
     if best_in >= 5:
         now, T, n = best_short, best_T, best_in  # a set of 5 that something contradicts
         x[:] = best_x
@@ -475,6 +500,29 @@ def _order_key(ab, rho0, short):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
+            four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
+            short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
+    """The minimal sets put off by :func:`_consensus` (their anchors pend (K, 4), linear
+    fixes pend_x (K, 3) and short-range counts pend_short (K,), the first ``npend``), each
+    passed to :func:`_minimal` in the order they were met when its short ranges are no more
+    than the best's so far, as the search would have done on meeting them (``xt``,
+    ``trial``: scratch); returns the best's (contradictions, T, iterations, status)."""
+    for p in range(npend):
+        if pend_short[p] > four_short:
+            continue
+        trial[:] = np.nan
+        for i in range(4):
+            trial[pend[p, i]] = rho0[pend[p, i]]
+        xt[:] = pend_x[p]
+        four_short, four_T, iters, four_st = _minimal(
+            ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo, hi,
+            bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
+        )  # fmt: skip
+    return four_short, four_T, iters, four_st
+
+
+@numba.njit(cache=True)
 def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo, hi,
              bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
              geo):  # fmt: skip  # pragma: no cover
@@ -486,12 +534,26 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st,
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
-    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo, four_short)
+    # with a T no smaller than the best's, only fewer contradictions win: count no further
+    bound = four_short if Tm < four_T else four_short - 1
+    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo, bound)
     if nshort < four_short or (nshort == four_short and Tm < four_T):
         four[:] = trial
         four_x[:] = xm
         return nshort, Tm, iters + it, st
     return four_short, four_T, iters + it, four_st
+
+
+@numba.njit(cache=True, inline="always")
+def _solve(ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, work):
+    # pragma: no cover - compiled
+    """:func:`simulation.least_squares.lm_solve` compiled into its caller, the scratch
+    ``work`` (:func:`simulation.least_squares.scratch`) unpacked there: the same results,
+    faster. Used by the step made most often (dropping an anchor); the other steps call
+    ``lm_solve``, which keeps the search quick to compile."""
+    r, u, rn, un, xn, step, free = work
+    return lm_solve_inline(ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u,
+                           rn, un, xn, step, free)  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")

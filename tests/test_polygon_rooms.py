@@ -14,7 +14,7 @@ import placement
 from placement.plan import LOCAL_SWARM
 from simulation import Room, simulate_ranges
 from simulation.multipath import compute_paths
-from simulation.polyhedral import line_of_sight
+from simulation.polyhedral import hidden_anchors, line_of_sight
 from simulation.received import received_windows
 from simulation.receiver import dsp_for
 
@@ -267,6 +267,22 @@ def test_line_of_sight_against_hand_computed_cases():
     assert line_of_sight(Room.techtile(), a * 0.5, p * 0.4).all()
     # the simulation's paths say the same
     assert (compute_paths(L_ROOM, a, p).los == los).all()
+
+
+@pytest.mark.parametrize("room", [L_ROOM, BOX_ROOM, Room.techtile()], ids=["L", "box", "shoebox"])
+def test_hidden_anchors_are_the_used_pairs_out_of_sight(room):
+    # two layouts, points of each, a random half of the pairs used: hidden where used and
+    # line_of_sight says blocked, nowhere else
+    rng = np.random.default_rng(3)
+    layouts = np.stack([_points(room, 5, rng), _points(room, 5, rng)])
+    owner = rng.integers(0, 2, 200)
+    points = _points(room, 200, rng)
+    used = rng.random((200, 5)) < 0.5
+    los = np.stack([line_of_sight(room, layouts[o], points[i : i + 1])[0]
+                    for i, o in enumerate(owner)])  # fmt: skip
+    hidden = hidden_anchors(room, layouts, owner, points, used)
+    np.testing.assert_array_equal(hidden, used & ~los)
+    assert hidden.any() == (bool(room.obstacles) or not room.is_convex)  # some are hidden
 
 
 def test_the_bound_counts_only_the_anchors_in_sight():
