@@ -424,11 +424,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         nshort *= M + 1  # as _contradictions counts them
         if best_short > 0 and t < HYPOTHESES:  # no uncontradicted set of 5 yet: for later
-            for i in range(4):
-                pend[npend, i] = order[c[i]]
-            pend_x[npend] = xt
-            pend_short[npend] = nshort
-            npend += 1
+            npend = _put_off(pend, pend_x, pend_short, npend, order, c, xt, nshort)
         elif best_short > 0 and nshort <= four_short:
             four_short, four_T, iters, four_st = _minimal(
                 ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo,
@@ -467,10 +463,21 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         for j in range(M):
             trial[j] = rho0[j] if used[j] else np.nan
         now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)  # the fix so far
+    return _fallback(x, T, n, iters, now, four, four_x, four_short, four_T, four_st, used, fst)
+
+
+@numba.njit(cache=True, inline="always")
+def _fallback(x, T, n, iters, now, four, four_x, four_short, four_T, four_st, used, fst):
+    # pragma: no cover - compiled
+    """The end of step 4 where no 5 anchors agree without a contradiction: the best minimal
+    set (its ranges in four (M,), fix four_x (3,), contradictions, T and status) replaces
+    the fix x (3,) (its T, n anchors ``used`` (M,), ``now`` contradictions) when its 4
+    ranges agree and it is less contradicted, or as little and with a smaller T. Returns
+    (T, n, iterations)."""
     if four_T <= MINIMAL_T and (four_short < now or (four_short == now == 0 and four_T < T)):
         x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
         fst[0] = four_st
-        for j in range(M):
+        for j in range(used.shape[0]):
             used[j] = four[j] == four[j]
         return four_T, 4, iters
     return T, n, iters
@@ -497,6 +504,18 @@ def _order_key(ab, rho0, short):  # pragma: no cover - compiled
                 key[j] += top + 1.0  # after every range not known to be an echo
                 break
     return key
+
+
+@numba.njit(cache=True, inline="always")
+def _put_off(pend, pend_x, pend_short, npend, order, c, xt, nshort) -> int:
+    # pragma: no cover - compiled
+    """Row ``npend`` of pend, pend_x, pend_short (:func:`_settle`): the minimal set's
+    anchors order[c] (4,), its linear fix xt (3,) and its short ranges; returns npend + 1."""
+    for i in range(4):
+        pend[npend, i] = order[c[i]]
+    pend_x[npend] = xt
+    pend_short[npend] = nshort
+    return npend + 1
 
 
 @numba.njit(cache=True)
