@@ -431,19 +431,13 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
                 hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
             )  # fmt: skip
         if inl >= 5 and _better(nshort, inl, best_short, best_in):
-            Tk, m, it, st = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded,
-                                    poly, max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
-            iters += it
-            # with no more anchors than the best's, only fewer contradictions win
-            bound = best_short if m > best_in else best_short - 1
-            nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, bound)
-            if m >= 5 and _better(nshort, m, best_short, best_in):
-                best_short, best_in, best_T, best_st = nshort, m, Tk, st
-                best_x[:] = xt
-                for j in range(M):
-                    used[j] = trial[j] == trial[j]
-                if nshort == 0 and Tk <= thr[m - 3]:
-                    break
+            best_short, best_in, best_T, best_st, iters, done = _promising(
+                ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, best_st, iters,
+                lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, loose, short,
+                work, geo,
+            )  # fmt: skip
+            if done:
+                break
         if not _next_colex(c, h):
             break
     if best_in >= 5 and best_short == 0:
@@ -455,25 +449,29 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short,
         loose, work, geo,
     )  # fmt: skip
+    return _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st,
+                     four, four_x, four_short, four_T, four_st, used, fst, trial, short, loose,
+                     geo)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st, four,
+              four_x, four_short, four_T, four_st, used, fst, trial, short, loose,
+              geo):  # fmt: skip  # pragma: no cover - compiled
+    """The end of step 4 where no 5 anchors agree without a contradiction: the fix is the
+    best refined set of 5 that something contradicts (best_x (3,), its contradictions,
+    anchors, T and status), else the fix so far x (3,) (its T, n anchors ``used`` (M,));
+    the best minimal set (its ranges in four (M,), fix four_x (3,), contradictions, T and
+    status) replaces it when its 4 ranges agree and it is less contradicted, or as little
+    and with a smaller T (``trial`` (M,): scratch). Returns (T, n, iterations)."""
     if best_in >= 5:
         now, T, n = best_short, best_T, best_in  # a set of 5 that something contradicts
         x[:] = best_x
         fst[0] = best_st
     else:
-        for j in range(M):
+        for j in range(used.shape[0]):
             trial[j] = rho0[j] if used[j] else np.nan
         now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)  # the fix so far
-    return _fallback(x, T, n, iters, now, four, four_x, four_short, four_T, four_st, used, fst)
-
-
-@numba.njit(cache=True, inline="always")
-def _fallback(x, T, n, iters, now, four, four_x, four_short, four_T, four_st, used, fst):
-    # pragma: no cover - compiled
-    """The end of step 4 where no 5 anchors agree without a contradiction: the best minimal
-    set (its ranges in four (M,), fix four_x (3,), contradictions, T and status) replaces
-    the fix x (3,) (its T, n anchors ``used`` (M,), ``now`` contradictions) when its 4
-    ranges agree and it is less contradicted, or as little and with a smaller T. Returns
-    (T, n, iterations)."""
     if four_T <= MINIMAL_T and (four_short < now or (four_short == now == 0 and four_T < T)):
         x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
         fst[0] = four_st
@@ -516,6 +514,29 @@ def _put_off(pend, pend_x, pend_short, npend, order, c, xt, nshort) -> int:
     pend_x[npend] = xt
     pend_short[npend] = nshort
     return npend + 1
+
+
+@numba.njit(cache=True)
+def _promising(ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, best_st, iters,
+               lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, loose, short,
+               work, geo):  # fmt: skip  # pragma: no cover - compiled
+    """A promising hypothesis of :func:`_consensus` (its linear fix in xt (3,), its ranges
+    in trial (M,)) refined (:func:`_refine`) and checked on the map; when it beats the best
+    refined set so far (fewer contradictions, then more anchors), best_x (3,) and ``used``
+    (M,) take it. Returns the best's (contradictions, anchors, T, status), the iterations
+    and whether it ends the search (5 or more anchors pass the test, nothing contradicts)."""
+    Tk, m, it, st = _refine(ab, rho0, xt, trial, loose, 3.0 * sigma, lo, hi, bounded, poly,
+                            max_iter, xtol, ftol, gtol, sigma, work)  # fmt: skip
+    iters += it
+    # with no more anchors than the best's, only fewer contradictions win
+    bound = best_short if m > best_in else best_short - 1
+    nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, bound)
+    if not (m >= 5 and _better(nshort, m, best_short, best_in)):
+        return best_short, best_in, best_T, best_st, iters, False
+    best_x[:] = xt
+    for j in range(used.shape[0]):
+        used[j] = trial[j] == trial[j]
+    return nshort, m, Tk, st, iters, nshort == 0 and Tk <= thr[m - 3]
 
 
 @numba.njit(cache=True)
