@@ -43,6 +43,8 @@ WALL, PLAN, FACE = 0, 1, 2
 #: a reflection point closer than this (m) to an end of its segment does not count, and a
 #: crossing this close to a segment's end does not block it
 EPS = 1e-9
+#: (m) a face whose plane passes this close to an anchor counts as facing it (:func:`facing`)
+FRONT_TOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -336,17 +338,19 @@ def _direct_los(nodes, source, kind, normal, d, box, blocking, plan):  # pragma:
 
 
 @numba.njit(cache=True)
-def _hidden_used(x, layouts, owner, used, kind, normal, d, box, blocking, plan):
+def _hidden_used(x, layouts, owner, used, front, kind, normal, d, box, blocking, plan):
     # pragma: no cover - compiled
     """(N, M) bool: the segment from point x[i] to anchor j of layout owner[i] is blocked,
-    tested only where used[i, j] (False elsewhere)."""
+    tested only where used[i, j] (False elsewhere), on the faces the anchor faces (front
+    (L, M, F), :func:`facing`)."""
     out = np.zeros(used.shape, dtype=np.bool_)
     for i in range(x.shape[0]):
         a = layouts[owner[i]]
         for j in range(used.shape[1]):
             if used[i, j]:
                 out[i, j] = _blocked(x[i, 0], x[i, 1], x[i, 2], a[j, 0], a[j, 1], a[j, 2], kind,
-                                     normal, d, box, blocking, plan, -1, -1)  # fmt: skip
+                                     normal, d, box, front[owner[i], j], plan, -1,
+                                     -1)  # fmt: skip
     return out
 
 
@@ -357,10 +361,10 @@ def hidden_anchors(room, layouts, owner, points, used) -> np.ndarray:
     used = np.ascontiguousarray(used, dtype=bool)
     if room.is_convex and not room.obstacles:
         return np.zeros(used.shape, dtype=bool)
-    return _hidden_used(np.ascontiguousarray(points, dtype=float),
-                        np.ascontiguousarray(layouts, dtype=float),
+    layouts = np.ascontiguousarray(layouts, dtype=float)
+    return _hidden_used(np.ascontiguousarray(points, dtype=float), layouts,
                         np.ascontiguousarray(owner, dtype=np.int64), used,
-                        *blocking_map(room))  # fmt: skip
+                        facing(room, layouts), *blocking_map(room))  # fmt: skip
 
 
 def paths(room, anchors: np.ndarray, nodes: np.ndarray, refl: Reflectors | None = None):
@@ -450,6 +454,23 @@ def blocking_map(room) -> tuple:
     return geo
 
 
+def facing(room, layouts) -> np.ndarray:
+    """(L, M, F) bool: face f of the room's map (:func:`blocking_map`, F faces) can block a
+    straight path to anchor j of ``layouts`` (L, M, 3) m, for :func:`sees_near`'s
+    ``facing``: the anchor lies on the face's air side. A path from an anchor in the air
+    that crosses anything of the room leaves the air first through a face the anchor lies
+    in front of, so a face behind the anchor never decides whether the path is blocked
+    (the answers are those of all faces). An anchor outside the air (outside the room or
+    inside an obstacle) keeps every face."""
+    _, normal, d, *_ = blocking_map(room)
+    a = np.asarray(layouts, dtype=float)
+    front = np.einsum("lmk,fk->lmf", a, normal) - d > -FRONT_TOL
+    if normal.shape[0]:
+        in_air = room.contains(a.reshape(-1, 3)).reshape(a.shape[:-1])
+        front |= ~in_air[..., None]
+    return np.ascontiguousarray(front)
+
+
 def _map(room) -> tuple:
     refl = reflectors(room)
     keep = refl.blocking
@@ -469,11 +490,13 @@ def sees(geo, p, q) -> bool:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def sees_near(geo, p, q, delta, every) -> bool:  # pragma: no cover - compiled
+def sees_near(geo, p, q, front, delta, every) -> bool:  # pragma: no cover - compiled
     """:func:`sees` from p (3,) and the six points ``delta`` m from p along the axes: from
     one of them (``every`` False: a position known to within centimetres does not hide an
-    anchor it grazes) or from all (``every`` True: the anchor surely sees it)."""
-    kind, normal, d, box, blocking, plan = geo
+    anchor it grazes) or from all (``every`` True: the anchor surely sees it); only the
+    faces of the map that the anchor q (3,) faces are tested (``front`` (F,),
+    :func:`facing`)."""
+    kind, normal, d, box, _, plan = geo
     if kind.shape[0] == 0:
         return True
     for k in range(7):
@@ -481,7 +504,7 @@ def sees_near(geo, p, q, delta, every) -> bool:  # pragma: no cover - compiled
         o1 = delta * ((k == 3) - (k == 4))
         o2 = delta * ((k == 5) - (k == 6))
         free = not _blocked(p[0] + o0, p[1] + o1, p[2] + o2, q[0], q[1], q[2], kind, normal,
-                            d, box, blocking, plan, -1, -1)  # fmt: skip
+                            d, box, front, plan, -1, -1)  # fmt: skip
         if free != every:
             return free
     return every

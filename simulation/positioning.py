@@ -35,7 +35,7 @@ import numpy as np
 
 from simulation import checks, degeneracy
 from simulation.least_squares import linear_fix, lm_rows
-from simulation.polyhedral import NO_MAP, blocking_map
+from simulation.polyhedral import NO_MAP, blocking_map, facing
 from simulation.robust import (
     NO_FIX,
     UNVERIFIED,
@@ -232,7 +232,7 @@ def locate(
     used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
     if method == "robust":
         used, quality = _robust(layouts, owner, R, fix, lo, hi, bounded, poly, int(max_iter),
-                                tols, test, room_map)  # fmt: skip
+                                tols, test, room_map, _front(room, layouts))  # fmt: skip
     converged = _converged(status, max_iter)
     if not full_output:
         return x.reshape(*lead, 3)
@@ -468,12 +468,12 @@ def check_test(range_sigma, false_alarm, alert_limit) -> None:
     checks.real("alert_limit", alert_limit, low=0.0, high=100.0, low_open=True, unit="m")
 
 
-def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_map):
+def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_map, front):
     """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
     fixes (:mod:`simulation.robust`) with the test ``test`` (range_sigma, false_alarm,
-    alert_limit) on the map ``room_map``
-    (:func:`simulation.polyhedral.blocking_map`); returns the anchors used (B, M) and the
-    qualities."""
+    alert_limit) on the map ``room_map`` (:func:`simulation.polyhedral.blocking_map`;
+    ``front`` (L, M, F) the faces each anchor faces); returns the anchors used (B, M) and
+    the qualities."""
     B, M = R.shape
     sigma, false_alarm, alert_limit = (float(v) for v in test)
     used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
@@ -483,7 +483,7 @@ def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_
                     _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
                     thresholds(false_alarm, M), bias_scales(false_alarm, M), alert_limit, used,
-                    quality, room_map)  # fmt: skip
+                    quality, room_map, front)  # fmt: skip
     return used, quality
 
 
@@ -498,6 +498,12 @@ def _check_room(room) -> None:
 def _room_map(room):
     """The map of ``room`` for the robust search (an empty map without a room)."""
     return NO_MAP if room is None else blocking_map(room)
+
+
+def _front(room, layouts) -> np.ndarray:
+    """(L, M, F) the faces of the map of ``room`` that each anchor of ``layouts`` (L, M, 3)
+    faces (:func:`simulation.polyhedral.facing`; F = 0 without a room)."""
+    return np.zeros((*layouts.shape[:2], 0), dtype=bool) if room is None else facing(room, layouts)
 
 
 def _floor_plan(floor_plan) -> np.ndarray:

@@ -191,13 +191,15 @@ def robust_rows(
     used,
     quality,
     geo,
+    front,
 ):  # pragma: no cover - compiled
     """Steps 2–5 of the module docstring for every row whose least-squares fix is in xs
     (B, 3), costs (B,), status (B,) (rows with status < 0 have no fix and are left); the
     anchors kept are written into used (B, M) and the quality into quality (B,) (``bias``
     (M + 1,) :func:`bias_scales`, ``alert`` the alert limit in m); ``geo``
     the room's map (:func:`simulation.polyhedral.blocking_map`; empty: nothing hides an
-    anchor)."""
+    anchor) and ``front`` (L, M, F) the faces of the map each anchor faces
+    (:func:`simulation.polyhedral.facing`)."""
     M = R.shape[1]
     work = scratch(M)
     rho, trial = np.empty(M), np.empty(M)
@@ -213,6 +215,7 @@ def robust_rows(
             quality[b] = NO_FIX
             continue
         ab = a[owner[b]]
+        gr = row_map(geo, front[owner[b]])
         rho[:] = R[b]
         x[:] = xs[b]
         fst[0] = status[b]
@@ -221,18 +224,18 @@ def robust_rows(
                                     sigma, thr, used[b], work, score, trial, xt, xb,
                                     fst)  # fmt: skip  # step 3
         clean = T <= thr[n - 3] and n >= 5
-        if clean and _contradictions(ab, R[b], rho, x, short, loose, geo, 0) > 0:
+        if clean and _contradictions(ab, R[b], rho, x, short, loose, gr, 0) > 0:
             clean, T, n, iters = _drop_hidden(ab, R[b], rho, x, T, n, iters, lo[b], hi[b],
                                               bounded, poly, drop_iter, xtol, ftol, gtol, sigma,
-                                              thr, loose, short, used[b], work, geo, trial, xt,
+                                              thr, loose, short, used[b], work, gr, trial, xt,
                                               fst)  # fmt: skip  # step 3's end
         if not clean:
             T, n, iters = _consensus(
                 ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, thr, loose, short, used[b], work, geo, fst,
+                gtol, sigma, thr, loose, short, used[b], work, gr, fst,
             )  # fmt: skip  # step 4
         T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
-                            xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, geo,
+                            xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, gr,
                             trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 4 here)
         status[b] = fst[0]
         xs[b] = x
@@ -285,7 +288,7 @@ def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter,
     for j in range(M):
         trial[j] = rho[j]
         if rho[j] == rho[j]:
-            if sees_near(geo, x, ab[j], GRAZE, False):
+            if _sees(geo, x, ab, j, False):
                 m += 1
             else:
                 trial[j] = np.nan
@@ -648,18 +651,34 @@ def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragm
     if n > bound or geo[0].shape[0] == 0:
         return n
     for j in range(M):
-        if kept[j] == kept[j] and not sees_near(geo, x, ab[j], GRAZE, False):
+        if kept[j] == kept[j] and not _sees(geo, x, ab, j, False):
             n += 1
             if n > bound:
                 return n
     miss = 0
     for j in range(M):
         if (kept[j] != kept[j] and rho0[j] - _distance(x, ab[j]) > long
-                and sees_near(geo, x, ab[j], GRAZE, True)):  # fmt: skip
+                and _sees(geo, x, ab, j, True)):  # fmt: skip
             miss += 1
             if n + miss - MISSES > bound:
                 break
     return n + max(miss - MISSES, 0)
+
+
+@numba.njit(cache=True, inline="always")
+def row_map(geo, front):  # pragma: no cover - compiled
+    """The map of one layout's rows: the room's map ``geo``
+    (:func:`simulation.polyhedral.blocking_map`) with, in place of its blocking mask, the
+    faces each anchor faces, front (M, F) (:func:`simulation.polyhedral.facing`)."""
+    return (geo[0], geo[1], geo[2], geo[3], front, geo[5])
+
+
+@numba.njit(cache=True, inline="always")
+def _sees(geo, x, ab, j, every) -> bool:  # pragma: no cover - compiled
+    """Anchor j of ab (M, 3) sees the position x (3,) from one of the points :data:`GRAZE`
+    from it (``every`` False) or from all (True) (:func:`simulation.polyhedral.sees_near`);
+    ``geo`` the row's map (:func:`row_map`)."""
+    return sees_near(geo, x, ab[j], geo[4][j], GRAZE, every)
 
 
 @numba.njit(cache=True)

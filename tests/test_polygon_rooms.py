@@ -14,7 +14,7 @@ import placement
 from placement.plan import LOCAL_SWARM
 from simulation import Room, simulate_ranges
 from simulation.multipath import compute_paths
-from simulation.polyhedral import hidden_anchors, line_of_sight
+from simulation.polyhedral import blocking_map, facing, hidden_anchors, line_of_sight, sees_near
 from simulation.received import received_windows
 from simulation.receiver import dsp_for
 
@@ -283,6 +283,28 @@ def test_hidden_anchors_are_the_used_pairs_out_of_sight(room):
     hidden = hidden_anchors(room, layouts, owner, points, used)
     np.testing.assert_array_equal(hidden, used & ~los)
     assert hidden.any() == (bool(room.obstacles) or not room.is_convex)  # some are hidden
+
+
+@pytest.mark.parametrize("room", [L_ROOM, BOX_ROOM], ids=["L", "box"])
+def test_the_faces_behind_an_anchor_never_decide_its_line_of_sight(room):
+    # from points anywhere in the room's box (outside the L, inside the cabinet too) to
+    # anchors in the air, the faces each anchor faces answer as all of the map's faces do
+    rng = np.random.default_rng(7)
+    geo = blocking_map(room)
+    anchors = _points(room, 12, rng, margin=0.02)[None]
+    front = facing(room, anchors)[0]
+    assert front.shape == (12, len(geo[0])) and 0 < front.sum() < front.size
+    blocked = 0
+    for p in rng.uniform(0, room.size, (60, 3)):
+        for j, a in enumerate(anchors[0]):
+            for every in (False, True):
+                got = sees_near(geo, p, a, front[j], 0.05, every)
+                assert got == sees_near(geo, p, a, geo[4], 0.05, every)
+                blocked += not got
+    assert blocked > 0  # some paths are blocked, so the comparison means something
+    # an anchor outside the air (outside the floor plan, inside the cabinet) keeps every face
+    outside = np.array([[[5.0, 5.0, 1.0], [3.0, 2.0, 1.0]]])
+    assert facing(room, outside)[0, 1 if room.obstacles else 0].all()
 
 
 def test_the_bound_counts_only_the_anchors_in_sight():

@@ -384,8 +384,8 @@ def test_a_fix_that_passes_the_test_on_an_anchor_it_cannot_see_leaves_that_ancho
     # out and the six west anchors fix the tag. With five in sight the step leaves the
     # choice to the consensus search.
     from simulation.least_squares import scratch
-    from simulation.polyhedral import blocking_map, line_of_sight
-    from simulation.robust import LOOSE, SHORT, _drop_hidden
+    from simulation.polyhedral import blocking_map, facing, line_of_sight
+    from simulation.robust import LOOSE, SHORT, _drop_hidden, row_map
 
     tag = np.array([3.0, 5.0, 1.2])
     west = np.concatenate([WEST, [[3.0, 9.97, 2.9]]])
@@ -398,7 +398,7 @@ def test_a_fix_that_passes_the_test_on_an_anchor_it_cannot_see_leaves_that_ancho
     thr = thresholds(1e-3, len(anchors))
     T = 2 * first.cost[0] / SIGMA**2
     assert T <= thr[4]  # the test alone does not see the bent range
-    geo, M = blocking_map(RACK_ROOM), len(anchors)
+    geo, M = row_map(blocking_map(RACK_ROOM), facing(RACK_ROOM, anchors[None])[0]), len(anchors)
     loose, short = max(LOOSE[0], LOOSE[1] * SIGMA), max(SHORT[0], SHORT[1] * SIGMA)
 
     def drop(r):
@@ -429,7 +429,7 @@ def test_a_room_that_is_not_a_room_is_refused_by_name():
 
 
 def test_a_position_grazing_an_edge_sees_the_anchor_beyond_it():
-    from simulation.polyhedral import blocking_map, sees, sees_near
+    from simulation.polyhedral import blocking_map, facing, sees, sees_near
 
     geo = blocking_map(RACK_ROOM)
     anchor = np.array([9.97, 0.5, 1.0])  # the segment from (3, y, 1) clears the rack's
@@ -439,8 +439,9 @@ def test_a_position_grazing_an_edge_sees_the_anchor_beyond_it():
     for y, seen, near, surely in cases:
         p = np.array([3.0, y, 1.0])
         assert sees(geo, p, anchor) == seen
-        assert sees_near(geo, p, anchor, 0.05, False) == near  # from one point 5 cm away
-        assert sees_near(geo, p, anchor, 0.05, True) == surely  # from all of them
+        front = facing(RACK_ROOM, anchor[None, None])[0, 0]  # the faces the anchor faces
+        assert sees_near(geo, p, anchor, front, 0.05, False) == near  # from one point 5 cm away
+        assert sees_near(geo, p, anchor, front, 0.05, True) == surely  # from all of them
     empty = blocking_map(Room(size=(4.0, 4.0, 3.0)))
     assert empty[0].size == 0 and sees(empty, np.zeros(3), np.ones(3))
 
@@ -602,7 +603,7 @@ def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not()
     # an echo of a metre is not tried
     from simulation.least_squares import scratch
     from simulation.polyhedral import NO_MAP
-    from simulation.robust import LOOSE, SHORT, _grow
+    from simulation.robust import LOOSE, SHORT, _grow, row_map
 
     tag = np.array([3.0, 1.5, 1.0])
     a = ANCHORS[:7]
@@ -614,7 +615,8 @@ def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not()
     thr = thresholds(1e-3, len(a))
     loose, short = max(LOOSE[0], LOOSE[1] * SIGMA), max(SHORT[0], SHORT[1] * SIGMA)
     T, n, _ = _grow(a, rho, x, 0.0, 4, 0, *REGION, True, np.empty((0, 2)), 30, 1e-10, 1e-12,
-                    1e-10, SIGMA, thr, loose, short, used, scratch(len(a)), NO_MAP,
+                    1e-10, SIGMA, thr, loose, short, used, scratch(len(a)),
+                    row_map(NO_MAP, np.zeros((len(a), 0), bool)),
                     np.empty(len(a)), np.empty(3), np.empty(len(a)),
                     np.zeros(1, np.int64))  # fmt: skip
     assert n == 5 and used.tolist() == [True] * 5 + [False] * 2
