@@ -224,10 +224,12 @@ def _values(v, name: str, n: int) -> np.ndarray:
 _AXES = "xyz"
 
 
-def _draw_room2d(ax, room: Room, iu: int, iv: int) -> None:
+def _draw_room2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
     """A polygonal room's floor plan (outline, the outside of it blanked) in a plan view,
     and the obstacles (cross-hatched, their height written on them in a plan view)
-    projected onto the (iu, iv) plane."""
+    projected onto the (iu, iv) plane. On a slice, ``cut`` (axis, value) its plane, an
+    obstacle the plane does not cut (a duct above a slice at tag height) is its dashed
+    outline only: the map under it is the slice's."""
     from matplotlib.patches import PathPatch, Rectangle
     from matplotlib.path import Path as MPath
 
@@ -245,22 +247,22 @@ def _draw_room2d(ax, room: Room, iu: int, iv: int) -> None:
         ax.plot(closed[:, 0], closed[:, 1], color="black", lw=1.2, zorder=2.3, gid="floorplan")
     for ob in room.obstacles:
         lo, hi = ob.lo, ob.hi
-        ax.add_patch(
-            Rectangle(
-                (lo[iu], lo[iv]),
-                hi[iu] - lo[iu],
-                hi[iv] - lo[iv],
-                facecolor=(0.3, 0.3, 0.3, 0.55),
-                edgecolor="black",
-                hatch="xx",
-                linewidth=0.8,
-                zorder=2.6,
-                gid="obstacles",
-            )  # fmt: skip
-        )
+        solid = cut is None or lo[cut[0]] <= cut[1] <= hi[cut[0]]
+        style = (dict(facecolor=(0.3, 0.3, 0.3, 0.55), hatch="xx", gid="obstacles") if solid
+                 else dict(facecolor="none", linestyle="--", gid="off-slice"))  # fmt: skip
+        ax.add_patch(Rectangle((lo[iu], lo[iv]), hi[iu] - lo[iu], hi[iv] - lo[iv],
+                               edgecolor="black", linewidth=0.8, zorder=2.6, **style))  # fmt: skip
         if (iu, iv) == (0, 1):
-            ax.annotate(f"{hi[2]:g} m", ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2), fontsize=6,
-                        ha="center", va="center", color="white", zorder=2.7)  # fmt: skip
+            ax.annotate(_obstacle_heights(lo, hi), ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2),
+                        fontsize=6, ha="center", va="center", color="white" if solid else "black",
+                        zorder=2.7)  # fmt: skip
+
+
+def _obstacle_heights(lo, hi) -> str:
+    """An obstacle's heights as a plan view writes them: its top ("2 m") for one that
+    stands on the floor, its bottom and top ("3–3.5 m") for one that does not (a duct, a
+    hanging cabinet)."""
+    return f"{hi[2]:g} m" if lo[2] <= 0 else f"{lo[2]:g}–{hi[2]:g} m"
 
 
 def _blank_outside(ax, room: Room, pts: np.ndarray, shape, extent) -> None:
@@ -277,12 +279,13 @@ def _blank_outside(ax, room: Room, pts: np.ndarray, shape, extent) -> None:
               zorder=1.5)  # fmt: skip
 
 
-def _draw_regions2d(ax, room: Room, iu: int, iv: int) -> None:
+def _draw_regions2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
     """Keep-outs (hatched grey) and tag zones (dashed) projected onto the (iu, iv) plane,
-    with a polygonal room's outline and its obstacles (:func:`_draw_room2d`)."""
+    with a polygonal room's outline and its obstacles (:func:`_draw_room2d`; ``cut`` a
+    slice's plane)."""
     from matplotlib.patches import Rectangle
 
-    _draw_room2d(ax, room, iu, iv)
+    _draw_room2d(ax, room, iu, iv, cut)
 
     for boxes, keepout in ((room.keepouts, True), (room.zones, False)):
         for lo, hi in boxes:
@@ -437,7 +440,7 @@ def _peb_panel(ax, room: Room, anchors, k: int, c: float, vals, norm, anchor_col
         rgba[np.isnan(vals.T)] = (1.0, 1.0, 1.0, 1.0)
         ax.imshow(rgba, origin="lower", extent=extent, interpolation="nearest",
                   aspect="equal", zorder=1.5)  # fmt: skip
-    _draw_regions2d(ax, room, iu, iv)
+    _draw_regions2d(ax, room, iu, iv, (k, c))
     # white edges: visible on the dark and the bright end of viridis
     _numbered_anchors2d(ax, anchors, iu, iv, anchor_color, edge="white")
     ax.set_xlim(extent[0], extent[1])
@@ -506,7 +509,7 @@ def coverage_map(
                         hatches=["////"], zorder=1.8)  # fmt: skip
             ax.contour(u, v, low.T.astype(float), levels=[0.5], colors="red",
                        linewidths=1.0, zorder=1.8)  # fmt: skip
-        _draw_regions2d(ax, room, 0, 1)
+        _draw_regions2d(ax, room, 0, 1, (2, z))
         _numbered_anchors2d(ax, anchors, 0, 1, anchor_color, edge="white")
         ax.set_xlim(0, L[0])
         ax.set_ylim(0, L[1])
@@ -551,10 +554,15 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
         )
 
 
+#: a surface whose normal's component along the view is at most this is seen edge-on
+EDGE_ON = 1e-6
+
+
 def _draw_mounting2d(ax, room: Room, k: int) -> None:
-    """The mounting surfaces seen along axis ``k``: a surface parallel to the view as its
-    shaded allowed region, one across it as a thick line along its trace (for a shoebox's
-    walls, its plane)."""
+    """The mounting surfaces seen along axis ``k``: a surface seen edge-on (the view
+    along it) as a thick line along its trace (for a shoebox's walls, its plane), any other
+    (parallel to the view, or oblique: a slanted wall of a floor plan seen from the south)
+    as its shaded allowed region projected onto the view."""
     from matplotlib.patches import Polygon as MPolygon
     from matplotlib.patches import Rectangle
 
@@ -578,7 +586,7 @@ def _draw_mounting2d(ax, room: Room, k: int) -> None:
         return
     lo, hi, idx = regions(room)[1]
     for i, s in enumerate(mounting_surfaces(room)):
-        if abs(s.normal[k]) > 0.99:  # parallel to the view: its allowed rectangles
+        if abs(s.normal[k]) > EDGE_ON:  # not seen edge-on: its allowed rectangles
             for a, b in zip(lo[idx == i], hi[idx == i], strict=True):
                 quad = s.point(np.array([a, [b[0], a[1]], b, [a[0], b[1]]]))[:, [iu, iv]]
                 ax.add_patch(MPolygon(quad, closed=True, facecolor=(0.85, 0.88, 0.93),
@@ -1156,7 +1164,7 @@ def _dop_layers(room, diff, grid, norm, cmap, marks, col, figsize, dpi, cb_label
     for iz, ax in enumerate(axs[:nz]):
         layer = diff[index[:, :, iz]]
         mesh = ax.pcolormesh(xe, ye, np.ma.masked_invalid(layer.T), cmap=cmap, norm=norm, gid="dop")
-        _draw_regions2d(ax, room, 0, 1)
+        _draw_regions2d(ax, room, 0, 1, (2, zs[iz]))
         _anchor_marks2d(ax, marks, col)
         ax.set_xlim(0, room.size[0])
         ax.set_ylim(0, room.size[1])

@@ -339,6 +339,43 @@ def test_plan_view_numbers_the_anchors_in_plan_and_elevation(tmp_path):
     assert len([a for a in plan.lines if a.get_gid() == "mounting"]) == 2
 
 
+def test_a_slanted_wall_is_seen_edge_on_from_above_and_as_an_area_from_the_south():
+    # a trapezoid whose east wall runs from (6, 0) to (8, 4); a duct hangs from the ceiling
+    room = Room.from_corners([[0, 0], [6, 0], [8, 4], [0, 4]], 3.0, obstacles=[
+        {"min": [1.0, 1.8, 2.5], "max": [5.0, 2.2, 3.0], "name": "duct"}])  # fmt: skip
+    plan, elevation = data_axes(F.plan_view(room, OTHER, figsize=(8, 3), dpi=40))
+    slanted = [ln.get_xydata() for ln in plan.lines if ln.get_gid() == "mounting"]
+    # the slanted wall from above: a line along it (its plane 3 cm inside), from y 0 to 4
+    assert any(np.allclose(np.ptp(xy, axis=0), [1.97, 3.94], atol=0.01) for xy in slanted)
+    # from the south every line is a wall seen edge-on: vertical or horizontal, no diagonal
+    for ln in elevation.lines:
+        if ln.get_gid() == "mounting":
+            (x0, z0), (x1, z1) = ln.get_xydata()
+            assert min(abs(x1 - x0), abs(z1 - z0)) < 1e-9
+    quads = [q.get_xy() for q in elevation.patches if q.get_gid() == "mounting"]
+    assert any(np.ptp(q[:, 0]) > 1.9 and np.ptp(q[:, 1]) > 2.5 for q in quads)  # the wall's area
+    # the duct's label in the plan gives its bottom and top
+    assert "2.5–3 m" in [t.get_text() for t in plan.texts]
+
+
+def test_a_slice_draws_solid_only_the_obstacles_its_plane_cuts():
+    # a cabinet up to 1.5 m and a duct from 2.5 m: the slice at 1 m cuts the cabinet only, the
+    # one at 2.75 m the duct only; the other is its dashed outline, the map under it visible
+    room = Room(size=(6.0, 4.0, 3.0), obstacles=[
+        {"min": [1.0, 1.0, 0.0], "max": [2.0, 2.0, 1.5], "name": "cabinet"},
+        {"min": [3.0, 1.5, 2.5], "max": [5.5, 2.0, 3.0], "name": "duct"}])  # fmt: skip
+    fig = F.coverage_map(room, OTHER, heights=(1.0, 2.75), resolution=0.25, dpi=20)
+    for ax, solid in zip(data_axes(fig)[:2], ("cabinet", "duct"), strict=True):  # then the bar
+        drawn = {p.get_gid(): p.get_x() for p in ax.patches if "slice" in str(p.get_gid())
+                 or p.get_gid() == "obstacles"}  # fmt: skip
+        assert drawn == {"obstacles": 1.0 if solid == "cabinet" else 3.0,
+                         "off-slice": 3.0 if solid == "cabinet" else 1.0}  # fmt: skip
+    # a projection (the layout's plan view) draws both solid
+    plan, _ = data_axes(F.plan_view(room, OTHER, figsize=(8, 3), dpi=40))
+    assert sorted(p.get_gid() for p in plan.patches if "obstacle" in str(p.get_gid())) == [
+        "obstacles", "obstacles"]  # fmt: skip
+
+
 def test_dop_difference_says_which_dop():
     a, b = np.full(270, 2.0), np.full(270, 1.5)
     assert "the paper's DOP = σ/σ_r" in F.dop_difference(ROOM, NODES, a, b, dpi=20).get_suptitle()

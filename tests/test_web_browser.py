@@ -1,7 +1,8 @@
 """The planning page in a real browser (headless Chromium driven by Playwright): load the
 L-shaped lab, drag an anchor and see the coverage change, drop one into a column and read
 the command line's message, refuse M = 2, run a quick plan to the end (its progress
-surviving a reload), and download the mounting sheet.
+surviving a reload), download the mounting sheet, and draw a room with a slanted wall and
+a hanging duct.
 
 It needs a Chromium on the machine (Debian: ``apt-get install chromium``); where there is
 none it is skipped, saying so. CI installs one (``.ci/run``)."""
@@ -154,3 +155,25 @@ def test_a_quick_plan_runs_to_the_end_and_its_sheet_downloads(page, server):
     assert download.value.suggested_filename == "sheet.html"
     text = Path(path).read_text()
     assert "<html" in text.lower() and text.count("anchor") >= 4
+
+
+def test_a_slanted_wall_is_drawn_and_a_hanging_duct_labelled_with_its_heights(page, tmp_path):
+    # a trapezoid whose east wall runs from (6, 0) to (8, 4), a duct hanging from the ceiling
+    room = tmp_path / "trapezoid.toml"
+    room.write_text(
+        'name = "trapezoid"\ncorners = [[0, 0], [6, 0], [8, 4], [0, 4]]\nheight = 3.0\n'
+        '[[obstacle]]\nname = "duct"\nmin = [1.0, 1.8, 2.5]\nmax = [5.0, 2.2, 3.0]\n'
+    )
+    page.set_input_files("#room-upload", str(room))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('trapezoid')")
+    lines = page.evaluate(
+        """() => [...document.querySelectorAll('#plan .mounting line')].map(l =>
+            ['x1', 'y1', 'x2', 'y2'].map(k => l[k].baseVal.value))"""
+    )
+    assert len(lines) == 4  # every wall's allowed rectangle, seen from above, the slanted one too
+    spans = sorted((round(abs(x2 - x1)) > 0, round(abs(y2 - y1)) > 0) for x1, y1, x2, y2 in lines)
+    assert spans.count((True, True)) == 1  # the slanted wall: neither horizontal nor vertical
+    assert "duct 2.5–3.0 m" in page.locator("#plan").text_content()
+    # the maps' slice at tag height does not cut the duct: its outline, the cells under it
+    page.wait_for_selector("#plan .obstacle.off-slice", state="attached")
+    assert page.locator("#plan .obstacle").count() == 1

@@ -146,25 +146,45 @@ function drawPlan() {
   el("polygon", { points: pts, fill: "#f4f4f4", stroke: "none" }, svg);
   if (state.maps) drawCells(el("g", { id: "cells" }, svg), f);
   el("polygon", { points: pts, fill: "none", stroke: "#222", "stroke-width": 3 }, svg);
-  // mounting surfaces: a wall's rectangles seen from above are segments, drawn as lines;
-  // the ceiling's are areas, drawn as a faint fill
+  // mounting surfaces: a wall's rectangles seen from above are segments (their corners
+  // project onto a line, whatever the wall's direction), drawn as lines between the two
+  // farthest corners; the ceiling's are areas, left to the room's fill
   const walls = el("g", { class: "mounting" }, svg);
   for (const q of r.mounting) {
-    const xs = q.map((c) => c[0]), ys = q.map((c) => c[1]);
-    const dx = Math.max(...xs) - Math.min(...xs), dy = Math.max(...ys) - Math.min(...ys);
-    if (dx < 1e-6 || dy < 1e-6) {
-      el("line", { x1: f.px(Math.min(...xs)), y1: f.py(Math.min(...ys)), x2: f.px(Math.max(...xs)),
-        y2: f.py(Math.max(...ys)), stroke: "#2b8cbe", "stroke-width": 4, "stroke-opacity": 0.6 }, walls);
+    if (Math.abs(shoelace(q)) > 1e-6) continue;
+    let ends = [q[0], q[1]], far = -1;
+    for (const a of q) for (const b of q) {
+      const d = Math.hypot(a[0] - b[0], a[1] - b[1]);
+      if (d > far) { far = d; ends = [a, b]; }
     }
+    el("line", { x1: f.px(ends[0][0]), y1: f.py(ends[0][1]), x2: f.px(ends[1][0]), y2: f.py(ends[1][1]),
+      stroke: "#2b8cbe", "stroke-width": 4, "stroke-opacity": 0.6 }, walls);
   }
   for (const z of r.zones) boxOutline(svg, f, z, [0, 1], { fill: "none", stroke: "#3182bd", "stroke-width": 1.5, "stroke-dasharray": "8 4" });
   for (const k of r.keepouts) boxOutline(svg, f, k, [0, 1], { fill: "#e31a1c", "fill-opacity": 0.25, stroke: "#e31a1c" });
+  // an obstacle the maps' slice does not cut (a duct above the tags) is its dashed outline:
+  // the cells under it are the slice's
+  const h = state.maps ? state.maps.height : null;
   for (const o of r.obstacles) {
-    boxOutline(svg, f, o, [0, 1], { fill: "#636363", "fill-opacity": 0.85, stroke: "#252525", class: "obstacle" });
+    const cut = h === null || (o.min[2] <= h && h <= o.max[2]);
+    boxOutline(svg, f, o, [0, 1], cut
+      ? { fill: "#636363", "fill-opacity": 0.85, stroke: "#252525", class: "obstacle" }
+      : { fill: "none", stroke: "#252525", "stroke-dasharray": "6 3", class: "obstacle off-slice" });
     label(svg, f.px((o.min[0] + o.max[0]) / 2), f.py((o.min[1] + o.max[1]) / 2) + 4,
-      `${o.name || "obstacle"} ${o.max[2].toFixed(1)} m`, { fill: "#fff" });
+      `${o.name || "obstacle"} ${o.min[2] > 0 ? `${o.min[2].toFixed(1)}–` : ""}${o.max[2].toFixed(1)} m`,
+      { fill: cut ? "#fff" : "#252525" });
   }
   drawAnchors(svg, f, [0, 1], "plan");
+}
+
+// the signed area (m²) of a polygon's projection onto the plan, [[x, y, z], ...]
+function shoelace(q) {
+  let a = 0;
+  for (let i = 0; i < q.length; i++) {
+    const [x0, y0] = q[i], [x1, y1] = q[(i + 1) % q.length];
+    a += x0 * y1 - x1 * y0;
+  }
+  return a / 2;
 }
 
 function drawElevation() {
