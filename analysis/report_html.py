@@ -437,10 +437,17 @@ def _what_if_section(ctx: Context) -> list[str]:
     except (ValueError, KeyError, TypeError):
         return ['<h2>What if</h2><p class="sub">stress.json is unreadable.</p>']
 
-    def cells(r):
-        return [_num(r["std"]), _num(r["mean"]), _num(r["p95"]), _percent(r["availability"])]
+    # what a user's tags see first, then σ (a file of an earlier version has no median)
+    method = w.get("settings", {}).get("system", {}).get("positioning", {}).get("method")
+    verified = method == "robust"
 
-    stats = ["σ (m)", "mean (m)", "P95 (m)", "availability"]
+    def cells(r):
+        share = [_percent(r.get("verified"))] if verified else []
+        return [_num(r.get("median")), _num(r["mean"]), _num(r["p95"]), *share,
+                _num(r["std"]), _percent(r["availability"])]  # fmt: skip
+
+    stats = ["median (m)", "mean (m)", "P95 (m)", *(["verified"] if verified else []), "σ (m)",
+             "availability"]  # fmt: skip
     rows = [[f"{r['anchor'] + 1}" + (" (worst)" if r["anchor"] == worst else ""), *cells(r),
              _percent(r["covered_share"])] for r in down]  # fmt: skip
     return [

@@ -20,6 +20,8 @@ def test_evaluate_writes_statistics(tmp_path, capsys):
     assert main([*args, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "Euclidean position error" in text and "std" in text
+    figures = text.split("realizations:\n")[1].split()
+    assert figures[0:5:2] == ["median", "mean", "P95"] and "verified" not in figures  # then std
     data = json.loads((out / "evaluation.json").read_text())
     for key in ("room", "anchors", "realizations", "seed", "stats", "per_node", "errors", "nodes"):
         assert key in data

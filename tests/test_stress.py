@@ -31,6 +31,20 @@ def test_what_if_is_reproducible_from_the_seed_and_serializes():
     assert [r["tolerance"] for r in a.mounting] == [0.0, 0.05]
 
 
+def test_every_row_leads_with_what_the_tags_see_and_each_table_reports_progress():
+    calls = []
+    res = _small(rng=0, progress=lambda phase, done, total: calls.append((phase, done, total)))
+    figures = ["median", "mean", "p95", "verified", "std", "availability"]
+    for r in (*res.anchor_down, *res.temperature, *res.mounting):
+        assert [k for k in r if k in figures] == figures  # in the order a user reads them
+        assert r["median"] <= r["p95"] and r["verified"] == 0.0  # least squares verifies nothing
+    assert {p for p, *_ in calls} == {"anchor down", "temperature", "mounting"}
+    assert ("anchor down", 5, 6) in calls and ("mounting", 3, 4) in calls  # 2 tolerances × 2
+    # a robust system's verified share: most fixes in this open room
+    robust = _small(rng=0, system="recommended")
+    assert robust.mounting[0]["verified"] > 0.5 and robust.mounting[0]["median"] < 0.05
+
+
 def test_an_anchor_down_never_improves_coverage():
     full = covered_share(ROOM, A, NODES)
     for r in _small(rng=0).anchor_down:
@@ -57,6 +71,8 @@ def test_the_stress_command(tmp_path, capsys):
     assert main(["stress", str(res), "--realizations", "1", "--draws", "1"]) == 0
     out = capsys.readouterr().out
     assert "worst" in out and "mounting tolerance" in out
+    assert out.splitlines()[1].split()[3:6] == ["median", "mean", "P95"]  # first, then sigma
+    assert "verified" not in out  # the paper's least squares verifies nothing
     assert json.loads((res / "stress.json").read_text())["kind"] == "stress"
     # the report shows the what-if tables after the validation
     assert main(["report", str(res), "--realizations", "0"]) == 0

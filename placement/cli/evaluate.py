@@ -24,11 +24,12 @@ def register(sub) -> None:
     """Add ``anchorplan evaluate`` and its arguments to the subcommand parsers ``sub``."""
     p = sub.add_parser(
         "evaluate",
-        help="simulate a layout (chirps, reverberation, noise, DSP, LS positioning)",
+        help="simulate a layout (chirps, reverberation, noise, DSP, positioning)",
         description="Run the full chirp-based reverberant simulation of a layout over the "
-        "room's evaluation grid for R noise realizations, solve the positions kept inside the "
-        "room as the planner does, and write DIR/evaluation.json with the Euclidean error "
-        "statistics (metres), per-node RMSE and DOP.",
+        "room's evaluation grid for R noise realizations, solve the positions with the "
+        "system's positioning (the paper's least squares by default), and write "
+        "DIR/evaluation.json with the Euclidean error statistics (metres), per-node RMSE and "
+        "DOP.",
     )
     p.add_argument(
         "--layout", metavar="L.json", required=True, help='{"anchors": [[x, y, z], ...]}'
@@ -78,10 +79,12 @@ def run(args) -> int:
     )
     print(describe_system(room, system))
     print("Euclidean position error in metres over the fixes of all nodes and realizations:")
+    # what the tags see first (and a robust system's verified share), then sigma
+    robust = system.positioning.method == "robust"
+    verified = f"  verified {100 * ev.verified:.1f} %" if robust else ""
     print(
-        f"  std {st['std']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}  "
-        f"rms {st['rms']:.4f}  median {st['median']:.4f}  max {st['max']:.4f}"
-        + availability_note(st)
+        f"  median {st['median']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}{verified}  "
+        f"std {st['std']:.4f}  rms {st['rms']:.4f}  max {st['max']:.4f}" + availability_note(st)
     )
     if ev.geometry != "3d":
         print(f"  the anchors are {ev.geometry}: positions may be ambiguous (see anchor_geometry)")
