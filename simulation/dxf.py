@@ -3,21 +3,25 @@
 **Reading** (:func:`read_floor_plan`, :func:`room_from_dxf`): the room's outline is the closed
 polyline (LWPOLYLINE or POLYLINE) on a named layer (default ``room``), the obstacles the
 closed axis-aligned rectangles on another (default ``obstacles``), standing from the floor
-to a given height. Coordinates are converted from the drawing's unit (``mm``, ``cm`` or
-``m``) to metres and shifted so that the outline's lowest x and y are 0, the room's
-origin. An axis-aligned rectangular outline gives the shoebox of its size, any other
-outline a polygonal room (:meth:`Room.from_corners`).
+to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
+(as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Coordinates are converted
+from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and shifted so that the
+outline's lowest x and y are 0, the room's origin. An axis-aligned rectangular outline
+gives the shoebox of its size, any other outline a polygonal room
+(:meth:`Room.from_corners`).
 
 **Writing** (:func:`write_plan`): the room's outline, obstacles, keep-outs and tag zones as
 closed polylines on their own layers (``room``, ``obstacles``, ``keepouts``, ``zones``; a
 box as its footprint, labelled with its name and heights), and the anchors as inserts of
 the block ``ANCHOR`` on the layer ``anchors`` with the attributes ``ID``, ``Z`` (height
 above the floor, m) and ``SURFACE``; in metres (``$INSUNITS`` 6) or millimetres. Reading
-a written file gives the room's outline back.
+a written file gives the room's outline and its obstacles' footprints, names and heights
+back (not their absorption or whether anchors may go on them: the drawing has neither).
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +36,10 @@ UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
 INSUNITS = {"mm": 4, "cm": 5, "m": 6}
 #: the layers written by :func:`write_plan` (and read by default)
 LAYERS = ("room", "obstacles", "keepouts", "zones", "anchors")
+#: a box's label as :func:`write_plan` writes it: "NAME z Z0-Z1 m" (heights in m)
+LABEL = re.compile(
+    r"^(?P<name>.*) z (?P<z0>[0-9.]+(?:e-?[0-9]+)?)-(?P<z1>[0-9.]+(?:e[-+]?[0-9]+)?) m$"
+)
 
 
 def _doc(path):
@@ -69,6 +77,13 @@ def read_floor_plan(
     ``path`` (module docstring), shifted to the outline's origin. ValueError naming the
     file and layer for a missing layer, no outline, an open or a second outline, or an
     obstacle that is not an axis-aligned rectangle."""
+    corners, footprints, _ = _read(path, layer, unit, obstacle_layer)
+    return corners, footprints
+
+
+def _read(path, layer, unit, obstacle_layer):
+    """:func:`read_floor_plan`'s (corners, footprints) and each footprint's label
+    (:func:`_labels`)."""
     checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
     scale = UNITS[unit]
@@ -104,7 +119,20 @@ def read_floor_plan(
                 "closed axis-aligned rectangle (obstacles are boxes)"
             )
         footprints.append(np.array([lo, hi]))
-    return corners - origin, footprints
+    return corners - origin, footprints, _labels(doc, obstacle_layer, scale, origin, footprints)
+
+
+def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, float] | None]:
+    """Per footprint (2, 2) m, the (name, z0, z1) m of the text "NAME z Z0-Z1 m" on
+    ``layer`` at its first corner (:func:`write_plan`'s label), or None."""
+    texts = []
+    for e in doc.modelspace().query("TEXT"):
+        m = LABEL.match(e.dxf.text.strip()) if e.dxf.layer.lower() == layer.lower() else None
+        if m is not None:
+            at = np.array([e.dxf.insert.x, e.dxf.insert.y]) * scale - origin
+            texts.append((at, m["name"], float(m["z0"]), float(m["z1"])))
+    return [next((t[1:] for t in texts if np.allclose(t[0], lo, atol=1e-6)), None)
+            for lo, _ in footprints]  # fmt: skip
 
 
 def room_from_dxf(
@@ -118,23 +146,26 @@ def room_from_dxf(
     **kw,
 ):
     """The room of the DXF floor plan ``path`` (module docstring): ``height`` m high, its
-    obstacles ``obstacle_height`` m high (needed when the layer has any); every other
-    keyword is a :class:`~simulation.room.Room` field."""
+    obstacles as their labels give them or, unlabelled, from the floor to
+    ``obstacle_height`` m (needed when the layer has any such); every other keyword is a
+    :class:`~simulation.room.Room` field."""
     h = checks.real("height", height, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="m")
-    corners, footprints = read_floor_plan(
-        path, layer=layer, unit=unit, obstacle_layer=obstacle_layer
-    )
+    corners, footprints, labels = _read(path, layer, unit, obstacle_layer)
     obstacles = list(kw.pop("obstacles", None) or [])
-    if footprints:
-        if obstacle_height is None:
-            raise ValueError(
-                f"obstacle_height: layer {obstacle_layer!r} of {path} has {len(footprints)} "
-                "obstacle(s): give their height in m"
-            )
+    unlabelled = sum(lab is None for lab in labels)
+    if unlabelled and obstacle_height is None:
+        raise ValueError(
+            f"obstacle_height: layer {obstacle_layer!r} of {path} has {unlabelled} "
+            "obstacle(s) without a height label ('NAME z Z0-Z1 m' at a corner): give their "
+            "height in m"
+        )
+    if obstacle_height is not None:
         oh = checks.real("obstacle_height", obstacle_height, low=0.0, high=h, low_open=True)
-        for k, (lo, hi) in enumerate(footprints):
-            obstacles.append({"min": [lo[0], lo[1], 0.0], "max": [hi[0], hi[1], oh],
-                              "name": f"obstacle-{k}"})  # fmt: skip
+    for k, ((lo, hi), lab) in enumerate(zip(footprints, labels, strict=True)):
+        if lab is None:
+            lab = (f"obstacle-{k}", 0.0, oh)
+        obstacles.append({"min": [lo[0], lo[1], lab[1]], "max": [hi[0], hi[1], lab[2]],
+                          "name": lab[0]})  # fmt: skip
     kw.setdefault("name", Path(str(path)).stem)
     size = corners.max(axis=0)
     rectangle = len(corners) == 4 and np.all(

@@ -96,6 +96,34 @@ def test_a_written_plan_reads_back(tmp_path, unit):
     assert back.size == room.size and back.is_shoebox
 
 
+@pytest.mark.parametrize("unit", ["m", "mm"])
+def test_a_written_plans_obstacles_read_back_with_their_names_and_heights(tmp_path, unit):
+    # the exported labels ("duct z 2.5-3 m") give each box its name and heights, a duct off
+    # the floor too; no obstacle_height is needed
+    room = Room.from_corners([[0, 0], [6, 0], [8, 4], [0, 4]], 3.0, obstacles=[
+        {"min": [1.0, 1.8, 2.5], "max": [5.0, 2.2, 3.0], "name": "duct"},
+        {"min": [6.0, 3.0, 0.0], "max": [7.0, 3.6, 1.75], "name": "cabinet"}])  # fmt: skip
+    a = np.array([[0.03, 1.0, 2.0], [3.0, 3.97, 2.5], [4.0, 0.03, 1.0], [2.0, 2.0, 2.97]])
+    path = write_plan(tmp_path / "t.dxf", room, a, unit=unit)
+    back = room_from_dxf(path, 3.0, unit=unit)
+    assert [o.name for o in back.obstacles] == ["duct", "cabinet"]
+    np.testing.assert_allclose([(*o.lo, *o.hi) for o in back.obstacles],
+                               [(*o.lo, *o.hi) for o in room.obstacles], atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(back.floor_corners, room.floor_corners, atol=1e-9)
+    # a box drawn by hand beside them has no label: it needs obstacle_height, named
+    doc = ezdxf.readfile(path)
+    k = 1e-3 if unit == "mm" else 1.0
+    doc.modelspace().add_lwpolyline([(2 / k, 0.5 / k), (3 / k, 0.5 / k), (3 / k, 1 / k),
+                                     (2 / k, 1 / k)], close=True,
+                                    dxfattribs={"layer": "obstacles"})  # fmt: skip
+    doc.saveas(path)
+    with pytest.raises(ValueError, match="obstacle_height: .* has 1 obstacle.* without a height"):
+        room_from_dxf(path, 3.0, unit=unit)
+    mixed = room_from_dxf(path, 3.0, unit=unit, obstacle_height=1.2)
+    assert [(o.name, o.lo[2], o.hi[2]) for o in mixed.obstacles] == [
+        ("duct", 2.5, 3.0), ("cabinet", 0.0, 1.75), ("obstacle-2", 0.0, 1.2)]  # fmt: skip
+
+
 def test_the_export_and_plan_commands_take_dxf(tmp_path, capsys):
     """``anchorplan export`` writes a plan's DXF; ``--room plan.dxf --room-height`` reads a
     floor plan; a missing height names its flag."""

@@ -50,7 +50,12 @@ def add_room_argument(parser) -> None:
     g.add_argument(
         "--dxf-layer", default="room", help="layer of the outline's closed polyline (room)"
     )
-    g.add_argument("--obstacle-height", type=float, metavar="M", help="height of the obstacles, m")
+    g.add_argument(
+        "--obstacle-height",
+        type=float,
+        metavar="M",
+        help="height of the obstacles the drawing does not label, m",
+    )
 
 
 def load_room(path: str | None, args=None) -> Room:
