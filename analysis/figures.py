@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import io
 import math
+import textwrap
 import zlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -424,8 +425,14 @@ def peb_map(
         )
         if finite.size < allvals.size:
             title += "   (grey: singular, PEB = ∞)"
-    fig.suptitle(title, fontsize=11)
+    fig.suptitle(_fit(title, fig, 11), fontsize=11)
     return fig
+
+
+def _fit(title: str, fig, fontsize: float) -> str:
+    """``title`` broken into lines that fit the figure's width (a glyph about half the
+    font size wide): a one-panel map is narrower than its title."""
+    return textwrap.fill(title, max(20, int(fig.get_figwidth() * 72 / (0.55 * fontsize))))
 
 
 def _peb_panel(ax, room: Room, anchors, k: int, c: float, vals, norm, anchor_color: str):
@@ -522,7 +529,7 @@ def coverage_map(
     cb.set_label("anchors heard")
     note = f"; hatched: < {k} heard (≤ {100 * short:.1f} % of a slice)" if short else ""
     reach = as_system(system).reach(room.speed_of_sound)
-    fig.suptitle(f"Anchors heard, M = {M}, reach {reach:.2f} m{note}", fontsize=10)
+    fig.suptitle(_fit(f"Anchors heard, M = {M}, reach {reach:.2f} m{note}", fig, 10), fontsize=10)
     return fig
 
 

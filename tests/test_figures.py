@@ -376,6 +376,24 @@ def test_a_slice_draws_solid_only_the_obstacles_its_plane_cuts():
         "obstacles", "obstacles"]  # fmt: skip
 
 
+def test_a_one_panel_maps_title_fits_its_figure():
+    # a 16 m hall's PEB map at one height is narrower than its title with the singular note
+    room = Room(size=(16.0, 10.0, 7.0), obstacles=[
+        {"min": [0, 0, 3.0], "max": [7.0, 10.0, 3.3], "name": "mezzanine"}])  # fmt: skip
+    a = np.array([[1.0, 0.03, 2.0], [8.0, 9.97, 4.0], [15.97, 5.0, 1.0], [9.0, 4.0, 6.97],
+                  [3.0, 9.97, 1.5]])  # fmt: skip
+    for fig in (F.peb_map(room, a, heights=(1.2,), dpi=40),
+                F.coverage_map(room, a, heights=(1.2,), dpi=40)):  # fmt: skip
+        fig.canvas.draw()
+        box = fig._suptitle.get_window_extent()
+        assert 0 <= box.x0 and box.x1 <= fig.bbox.x1
+    assert "singular" in fig_title(F.peb_map(room, a, heights=(1.2,), dpi=40))
+
+
+def fig_title(fig) -> str:
+    return fig._suptitle.get_text()
+
+
 def test_dop_difference_says_which_dop():
     a, b = np.full(270, 2.0), np.full(270, 1.5)
     assert "the paper's DOP = σ/σ_r" in F.dop_difference(ROOM, NODES, a, b, dpi=20).get_suptitle()
