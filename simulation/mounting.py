@@ -348,8 +348,8 @@ def check_mounting_area(room) -> None:
         if not np.any(area[idx == i] > 0):
             cut = [k for k, (a, b) in enumerate(room.keepouts) if _box_footprint(s, a, b)]
             obs = [k for k, ob in enumerate(room.obstacles) if _box_footprint(s, ob.lo, ob.hi)]
-            feet = [[list(f[0]), list(f[1])] for a, b in room.keepouts
-                    if (f := _box_footprint(s, a, b))]  # fmt: skip
+            feet = [[[round(float(v), 6) for v in f[0]], [round(float(v), 6) for v in f[1]]]
+                    for a, b in room.keepouts if (f := _box_footprint(s, a, b))]  # fmt: skip
             raise ValueError(
                 f"keepouts: boxes {cut} ({feet} in the plane)"
                 + (f" and obstacles {obs}" if obs else "")

@@ -326,7 +326,10 @@ def test_room_pickles_and_replaces():
         ({"keepouts": [((2.0, 0.0), (5.0, 0.1, 2.0))]}, r"keepouts\[0\] min: expected 3"),
         ({"keepouts": [(1.0, 2.0, 3.0)]}, r"keepouts\[0\]: expected a box"),
         ({"keepouts": [{"min": [0, 0, 0]}]}, r"keepouts\[0\]: expected keys"),
-        ({"keepouts": [((0.0, 0.0, 0.0), (8.0, 0.1, 2.4))]}, r"whole mounting area.*'south'"),
+        (  # the box's footprint in plain numbers
+            {"keepouts": [((0.0, 0.0, 0.0), (8.0, 0.1, 2.4))]},
+            r"\(\[\[\[0\.0, 0\.0\], \[8\.0, 2\.4\]\]\] in the plane\).*whole .*'south'",
+        ),
         (  # two boxes together cover the ceiling
             {"keepouts": [((0, 0, 2.3), (4.0, 4, 2.4)), ((3.9, 0, 2.3), (8, 4, 2.4))]},
             r"boxes \[0, 1\].*'ceiling'",
