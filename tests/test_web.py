@@ -53,6 +53,7 @@ def test_the_page_and_its_state(lab):
     assert [k["name"] for k in s["room"]["keepouts"]] == ["windows"]
     assert len(s["room"]["zones"]) == 2 and s["system"]["name"] == "paper"
     assert s["files"] and all(f.endswith((".toml", ".dxf")) for f in s["files"])
+    assert s["room_id"] in s["files"] and s["room_id"].endswith("/l-shaped-lab.toml")
     assert allowed(room, np.array(s["anchors"])).all()
 
 

@@ -91,6 +91,14 @@ def _row(page, index: int) -> str:
     return page.locator("#anchors tbody tr").nth(index).inner_text()
 
 
+def test_the_room_file_list_names_the_files_and_selects_the_room_open(page):
+    selected = page.evaluate(
+        "(() => { const s = document.getElementById('room-file');"
+        " return [s.options[s.selectedIndex].text, s.value]; })()"
+    )
+    assert selected[0] == "l-shaped-lab.toml" and selected[1].endswith("/l-shaped-lab.toml")
+
+
 def test_drag_an_anchor_and_the_coverage_changes(page):
     before = page.locator("#covered-k").inner_text(), page.get_attribute("#k-line", "d")
     assert float(_row(page, 6).split()[3]) == 2.97  # anchor 6: on the ceiling, west

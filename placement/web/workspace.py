@@ -165,6 +165,14 @@ class Workspace:
                 ]
         return out
 
+    def _file_id(self, path) -> str | None:
+        """The ``folder-index/name`` of ``path`` among :meth:`room_files` (None: not one)."""
+        if path is None:
+            return None
+        path = Path(path).resolve()
+        return next((f"{i}/{path.name}" for i, folder in enumerate(self.folders)
+                     if folder.resolve() == path.parent), None)  # fmt: skip
+
     def resolve(self, name: str) -> Path:
         """The file ``folder-index/name`` of :meth:`room_files`; ValueError otherwise."""
         if str(name) not in self.room_files():
@@ -192,6 +200,7 @@ class Workspace:
         return {
             "room": scene.drawing(room),
             "room_file": None if self.room_path is None else Path(self.room_path).name,
+            "room_id": self._file_id(self.room_path),
             "system": {
                 "name": system.name,
                 "verifies": system.positioning.method == "robust",

@@ -346,7 +346,9 @@ function render(data) {
   document.getElementById("room-name").textContent = `— ${data.room.name}${data.room_file ? ` (${data.room_file})` : ""}`;
   document.getElementById("system-line").textContent = data.system.describe;
   const sel = document.getElementById("room-file");
-  sel.innerHTML = data.files.map((f) => `<option>${f}</option>`).join("");
+  // each file by its name (its folder's index is the value), the room open selected
+  sel.innerHTML = data.files.map((f) => `<option value="${f}">${f.slice(f.indexOf("/") + 1)}</option>`).join("");
+  if (data.room_id && data.files.includes(data.room_id)) sel.value = data.room_id;
   document.getElementById("system").value = data.system.chosen || "";
   drawField(data.field);
   drawPlan();
