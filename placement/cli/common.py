@@ -227,9 +227,9 @@ def add_effort_argument(p) -> None:
         "--effort",
         choices=EFFORT_NAMES,
         default="default",
-        help="preset of the search, finalists and validation options: quick (a first answer "
-        "in seconds), default, thorough (minutes); the other flags change single values of "
-        "it (default)",
+        help="preset of the search, finalists and validation options: quick (a first answer: "
+        "seconds in the paper's room, minutes in a room with obstacles), default, thorough "
+        "(minutes); the other flags change single values of it (default)",
     )
 
 
