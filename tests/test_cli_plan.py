@@ -63,3 +63,22 @@ def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
         ValueError, match=f"--finalists: must be an integer in \\[1, {particles}\\]"
     ):
         _check_args(bad, room, None)
+
+
+def test_least_squares_in_a_room_that_hides_anchors_prints_the_echo_note():
+    # the committed plans read back: the L-lab with the paper's system (field median 1.3 m)
+    # gets the note; the same room with the recommended system, and the paper's own room,
+    # do not
+    from pathlib import Path
+
+    from placement.cli.plan import echo_note
+    from placement.plan_result import PlacementResult
+
+    examples = Path(__file__).resolve().parent.parent / "docs" / "examples"
+    lab = PlacementResult.read(examples / "l-shaped-lab")
+    note = echo_note(lab.room, lab.system, lab.validation)
+    assert note.startswith("note: walls or obstacles") and "--system recommended" in note
+    assert f"field median {lab.validation.field.median:.2f} m" in note
+    for name in ("l-shaped-lab-recommended", "techtile"):
+        res = PlacementResult.read(examples / name)
+        assert echo_note(res.room, res.system, res.validation) is None

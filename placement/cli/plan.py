@@ -347,7 +347,32 @@ def _print_result(res, args) -> None:
     for a in res.anchors:
         print(f"  {a[0]:7.3f} {a[1]:7.3f} {a[2]:7.3f}")
     _print_validation(res.validation, res.system.positioning.method == "robust")
+    note = echo_note(res.room, res.system, res.validation)
+    if note:
+        print(note)
     _print_phases(res)
+
+
+def echo_note(room, system, validation) -> str | None:
+    """A note where least squares meets echoes: in a room whose walls or obstacles hide
+    anchors from some tags, a receiver there ranges on an echo and least squares keeps
+    the range, so the fix moves by metres; the recommended system rejects such ranges
+    (docs/model.md, "Positioning that rejects echoes"). None elsewhere, or when the field
+    check's median is within 0.1 m."""
+    field = None if validation is None else validation.field
+    if (system.positioning.method != "ls" or field is None or not field.median > ECHO_NOTE_M
+            or (room.is_convex and not room.obstacles)):  # fmt: skip
+        return None
+    return (f"note: walls or obstacles hide anchors from some tags here; their receivers range "
+            f"on echoes and least squares keeps those ranges (field median {field.median:.2f} "
+            "m). The recommended system (--system recommended: a first-path receiver, echoes "
+            "rejected) plans such rooms to centimetres (BENCHMARKS.md, \"Rooms we had not "
+            "seen\").")  # fmt: skip
+
+
+#: (m) a field median above this, with least squares in a room that hides anchors, prints
+#: :func:`echo_note`
+ECHO_NOTE_M = 0.1
 
 
 def _print_validation(v, robust: bool = False) -> None:
