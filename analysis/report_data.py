@@ -32,9 +32,9 @@ class Simulated:
 
     errors (R, P); rmse (P,) per-node RMS over realizations; dop (P,) the paper's DOP
     (standard deviation of the error / σ_r) and dop_rms (P,) the RMS-based one (RMSE / σ_r),
-    None when unknown; stats {std, mean, p95, rms, n_invalid}; estimates (R, P, 3) and
-    range_errors (R, P, M) when simulated here (the JSON files do not store them); source
-    says where the numbers come from.
+    None when unknown; stats {std, mean, p95, rms, median, n_invalid, availability};
+    estimates (R, P, 3) and range_errors (R, P, M) when simulated here (the JSON files do
+    not store them); source says where the numbers come from.
     """
 
     errors: np.ndarray
@@ -192,21 +192,21 @@ def json_array(x, name: str, ndim: int | None = None) -> np.ndarray:
 
 def _stats_from(src: dict | None, errors: np.ndarray | None) -> dict[str, float]:
     """The stored statistics when the block has them all, else those of the errors; with
-    ``n_invalid`` and the ``availability`` (the share of realizations with a fix)."""
+    the ``median``, ``n_invalid`` and the ``availability`` (the share of realizations with
+    a fix), stored or computed (NaN when neither)."""
     computed = error_stats(errors) if errors is not None else None
     if src and all(isinstance(src.get(k), int | float) for k in SHOWN_STATS):
         out = {k: float(src[k]) for k in SHOWN_STATS}
         out["n_invalid"] = int(src.get("n_invalid") or 0)
-        stored = src.get("availability")
-        out["availability"] = (
-            float(stored)
-            if isinstance(stored, int | float)
-            else (computed["availability"] if computed is not None else math.nan)
-        )
+        for k in ("median", "availability"):
+            stored = src.get(k)
+            out[k] = (float(stored) if isinstance(stored, int | float)
+                      else computed[k] if computed is not None else math.nan)  # fmt: skip
         return out
     if computed is not None:
-        return {k: computed[k] for k in (*SHOWN_STATS, "n_invalid", "availability")}
-    return {**dict.fromkeys(SHOWN_STATS, math.nan), "n_invalid": 0, "availability": math.nan}
+        return {k: computed[k] for k in (*SHOWN_STATS, "median", "n_invalid", "availability")}
+    return {**dict.fromkeys((*SHOWN_STATS, "median"), math.nan), "n_invalid": 0,
+            "availability": math.nan}  # fmt: skip
 
 
 def _per_node(per_node: dict, key: str, source: str, P: int) -> np.ndarray | None:

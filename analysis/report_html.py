@@ -22,7 +22,7 @@ from analysis.coverage import covered_share
 from analysis.fim import peb
 from analysis.report_data import EVALUATION_FILE, RESULT_FILE, Context, LayoutEntry
 from simulation.room import SURFACES, Room
-from simulation.statistics import error_stats
+from simulation.statistics import error_stats, penalty_text
 
 #: packages whose versions the report lists
 PACKAGES = (
@@ -281,7 +281,7 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
                 _mean_finite(s.dop_rms if s else None),
                 _num(pb["mean"]),
                 _num(pb["p95"]),
-                _num(e.cost, 4) if e.cost is not None else "–",
+                _e(penalty_text(e.cost)) if penalty_text(e.cost) else _num(e.cost, 4),
             ]
         )
     return rows

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simulation import checks
+from simulation.statistics import BELOW_TARGET_COST  # the penalty, beside the no-fix one
 
 #: the anchors in line of sight a node needs for the robust positioning to find one echo
 K_LINE_OF_SIGHT = 5
@@ -105,12 +106,6 @@ class CoverageTarget:
 
     def to_dict(self) -> dict:
         return {"k": self.k, "share": self.share}
-
-
-#: the cost of a layout below a coverage target: BELOW_TARGET_COST · (1 + the share of the
-#: nodes it is short) + its cost; above every cost of a layout that meets it (the costs of
-#: layouts with no-fixes stay below 2·NO_FIX_COST + 1e6, :mod:`simulation.statistics`)
-BELOW_TARGET_COST = 1e14
 
 
 def constrain(costs, counts, target: CoverageTarget | None) -> np.ndarray:

@@ -137,6 +137,22 @@ STATISTICS: dict[str, Callable[[np.ndarray], float]] = {k: _strict(k) for k in _
 #: room of at most 100 m per side lies within a few hundred metres of it, so its error
 #: variance stays below 1e6 m²
 NO_FIX_COST = 1e12
+#: the cost of a layout below a coverage target (:func:`placement.coverage.constrain`):
+#: BELOW_TARGET_COST · (1 + the share of the nodes it is short) + its cost; above every
+#: cost of a layout that meets it (the costs of layouts with no-fixes stay below
+#: 2·NO_FIX_COST + 1e6)
+BELOW_TARGET_COST = 1e14
+
+
+def penalty_text(cost) -> str | None:
+    """What a penalized cost means, for a reader: "below the coverage target" or "x %
+    without a fix" (:data:`BELOW_TARGET_COST`, :data:`NO_FIX_COST`); None for a cost that
+    is not a penalty (its value is the figure)."""
+    if cost is None or not cost >= NO_FIX_COST:
+        return None
+    if cost >= BELOW_TARGET_COST:
+        return "below the coverage target"
+    return f"{100 * (cost / NO_FIX_COST - 1):.2g} % without a fix"
 
 
 def row_statistics(name: str, errors) -> np.ndarray:
@@ -243,14 +259,21 @@ def _ratio(errors, range_errors, spread: Callable[[np.ndarray], np.ndarray]) -> 
         )
     sigma_r = range_std(r)
     out = np.full(sigma_r.shape, np.inf)
-    np.divide(spread(e), sigma_r, out=out, where=sigma_r > 0)
+    np.divide(spread(e), sigma_r, out=out, where=sigma_r > RANGE_STD_FLOOR)
     return out
+
+
+#: (m) a node whose ranges vary by at most this over the realizations has no DOP (+inf): a
+#: receiver that picks the same sample every time leaves only the rounding of equal values
+#: (about 1e-17 m), and a ratio to it is not a dilution of anything
+RANGE_STD_FLOOR = 1e-9
 
 
 def dop(errors, range_errors) -> np.ndarray:
     """(P,) the paper's DOP (§V-A): σ^p / σ_r^p, with σ^p the standard deviation over the
     R realizations of the Euclidean error at node p (:func:`node_std`) and σ_r^p the
-    :func:`range_std`; +inf where σ_r = 0 (e.g. one realization).
+    :func:`range_std`; +inf where σ_r is 0 (e.g. one realization) or within
+    :data:`RANGE_STD_FLOOR` of it.
 
     errors (R, P) Euclidean errors, range_errors (R, P, M) signed range errors (m).
     """
@@ -259,6 +282,7 @@ def dop(errors, range_errors) -> np.ndarray:
 
 def dop_rms(errors, range_errors) -> np.ndarray:
     """(P,) the RMS-based DOP: RMSE^p / σ_r^p with RMSE^p = √mean_r e_rp² (:func:`node_rmse`);
-    +inf where σ_r = 0. It counts a node's mean error as well as its spread (RMSE² = σ² +
-    mean², so dop_rms ≥ :func:`dop`): a steady multipath bias raises it, not the paper's."""
+    +inf where σ_r is within :data:`RANGE_STD_FLOOR` of 0. It counts a node's mean error as
+    well as its spread (RMSE² = σ² + mean², so dop_rms ≥ :func:`dop`): a steady multipath
+    bias raises it, not the paper's."""
     return _ratio(errors, range_errors, node_rmse)

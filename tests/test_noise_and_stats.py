@@ -140,6 +140,11 @@ def test_dop_is_the_papers_and_dop_rms_adds_the_bias():
     # one realization: σ_r = 0, both +inf
     assert np.all(np.isinf(analysis.dop(e[:1], range_err[:1])))
     assert np.all(np.isinf(analysis.dop_rms(e[:1], range_err[:1])))
+    # a receiver that picks the same range every time: σ_r is the rounding of equal values
+    # (range errors 0.1 + 0.2 - 0.3 and the like), not a spread to divide by
+    same = np.broadcast_to(np.array([0.1, 0.7, 0.3, 0.05]) * 3, (R, P, M)) + 1e-3
+    assert 0 < np.max(analysis.range_std(same)) < 1e-12  # rounding: a ratio to it is ~1e12
+    assert np.all(np.isinf(analysis.dop_rms(e, same))) and np.all(np.isinf(analysis.dop(e, same)))
     truth = np.zeros((P, 3))
     np.testing.assert_allclose(analysis.axis_errors(pos, truth), np.abs(pos))
     np.testing.assert_allclose(analysis.euclidean_errors(pos, truth), e)

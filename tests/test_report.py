@@ -204,6 +204,30 @@ def test_report_shows_the_plans_validation_sections(tmp_path, monkeypatch):
     check_html(rp.build_report(tmp_path, dpi=30).html)
 
 
+def test_the_median_card_is_the_validations_median(tmp_path):
+    # the committed techtile plan: the card shows the median its validation stored
+    import shutil
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parent.parent / "docs" / "examples" / "techtile"
+    for name in ("result.json", "layout.json"):
+        shutil.copy(src / name, tmp_path / name)
+    median = json.loads((src / "result.json").read_text())["validation"]["median"]
+    rep = rp.build_report(tmp_path, realizations=0, dpi=20)
+    assert f"<b>{median:.3f} m</b><span>median error (optimized, at the nodes)" in rep.html
+
+
+def test_a_penalized_starting_layouts_cost_says_what_it_means(tmp_path, monkeypatch):
+    monkeypatch.setattr(rp, "_evaluator", lambda: None)
+    result, _ = write_result(tmp_path, history=False)
+    result["seeds"][0]["cost"] = 1.2e14  # below the coverage target
+    result["seeds"][1]["cost"] = 1.1e12 + 0.3  # 10 % of the node realizations without a fix
+    (tmp_path / "result.json").write_text(json.dumps(result))
+    body = "".join(check_html(rp.build_report(tmp_path, dpi=20).html).text)
+    assert "below the coverage target" in body and "10 % without a fix" in body
+    assert "1.2e+14" not in body and "1.1e+12" not in body
+
+
 def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch):
     monkeypatch.setattr(rp, "_evaluator", lambda: None)
     write_result(tmp_path, validation=False, history=False)

@@ -8,13 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from placement.coverage import BELOW_TARGET_COST
 from placement.serialization import to_jsonable
 from simulation import checks
 from simulation.dxf import room_from_dxf
 from simulation.output import write_file
 from simulation.room import Room
-from simulation.statistics import NO_FIX_COST
+from simulation.statistics import penalty_text
 
 __all__ = [
     "add_room_argument",
@@ -244,12 +243,8 @@ def number(x, spec: str = ".4g") -> str:
 
 def cost_text(x) -> str:
     """A planner's cost for the reader: :func:`number`, or what a penalty says instead of
-    its value (a layout below the coverage target, one with nodes without a fix)."""
-    if x == x and x >= BELOW_TARGET_COST:
-        return "below the coverage target"
-    if x == x and x >= NO_FIX_COST:
-        return f"{100 * (x / NO_FIX_COST - 1):.2g} % without a fix"
-    return number(x)
+    its value (:func:`simulation.statistics.penalty_text`)."""
+    return penalty_text(x) or number(x)
 
 
 def availability_note(summary: dict) -> str:
