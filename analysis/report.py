@@ -44,6 +44,7 @@ import numpy as np
 
 from analysis.coverage import bound
 from analysis.fim import DEFAULT_SIGMA
+from analysis.progress import ProgressBar, check_progress
 from analysis.report_data import (
     Context,
     Figure,
@@ -71,10 +72,10 @@ def _evaluator():
 
 
 # -- simulation here -------------------------------------------------------------------------
-def _simulate_missing(ctx: Context, seed: int) -> None:
+def _simulate_missing(ctx: Context, seed: int, bar: ProgressBar) -> None:
     """Simulate (R = ``ctx.realizations``, common noise ``seed``) every layout but the
     starting layouts that has no fresh simulation: the corners and naive comparisons, and
-    the per-axis and range errors the files do not store."""
+    the per-axis and range errors the files do not store (one step of ``bar`` each)."""
     R = ctx.realizations
     evaluate = _evaluator() if R > 0 else None
     if R == 0:
@@ -86,9 +87,9 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
         )
     if evaluate is None:
         return
-    for e in ctx.layouts:
-        if e.role == "initial" or e.fresh is not None:
-            continue
+    todo = [e for e in ctx.layouts if e.role != "initial" and e.fresh is None]
+    for i, e in enumerate(todo):
+        bar.update(i, len(todo))
         try:
             ctx.room.check_anchors(e.anchors)
         except ValueError as exc:
@@ -101,6 +102,7 @@ def _simulate_missing(ctx: Context, seed: int) -> None:
         if e.sim is None:
             e.sim = e.fresh
         logger.info("simulated %s, R = %d, in %.1f s", e.name, R, time.perf_counter() - t)
+    bar.close()
 
 
 def _check_failures(ctx: Context) -> None:
@@ -131,6 +133,7 @@ def build_report(
     dpi: float = 100,
     figures_dir: str | Path | None = None,
     comparisons: Mapping[str, Any] | None = None,
+    progress=False,
 ) -> Report:
     """Render the report of ``result_dir`` (see the module docstring).
 
@@ -143,13 +146,16 @@ def build_report(
     comparisons: layouts to compare with, name → anchors (M, 3) or a precomputed
         :class:`simulation.Evaluation`; e.g. ``{"naive": placement.naive_layout(room, M)}``
         (``anchorplan report`` adds that one). The corners layout is always added.
+    progress: a bar per simulated layout (True), none (False) or a callable
+        ``progress("report simulations", done, total)`` (:mod:`analysis.progress`).
     """
     if int(realizations) != realizations or realizations < 0:
         raise ValueError(f"realizations: must be an integer >= 0, got {realizations}")
     seed = streams.entropy("rng", rng)
+    progress = check_progress(progress)
     t0 = time.perf_counter()
     ctx = _context(result_dir, sigma, int(realizations), comparisons)
-    _simulate_missing(ctx, seed)
+    _simulate_missing(ctx, seed, ProgressBar(progress, "report simulations"))
     _check_failures(ctx)
     from analysis import report_figures  # matplotlib only when a report is built
 

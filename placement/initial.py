@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
+from analysis.progress import ProgressBar
 from placement import ties
-from placement.progress import ProgressBar
 from placement.serialization import fingerprint, write_json_atomic
 from placement.simselect import SearchOptions
 from placement.streams import phase_seed

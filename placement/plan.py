@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, peb
+from analysis.progress import ProgressBar, check_progress
 from placement import resume, ties
 from placement.costs import AUTO, DrawsCost, cost_name, default_cost, is_simulated, make_cost
 from placement.coverage import CoverageTarget
@@ -47,7 +48,6 @@ from placement.effort import effort_options
 from placement.finalists import FinalistOptions, best_distinct, score_finalists
 from placement.initial import InitialLayout, analytic_initial, build_table, search_initial
 from placement.plan_result import PlacementResult, PlanSettings
-from placement.progress import ProgressBar, check_progress
 from placement.pso import PSOOptions, PSOResult, pso
 from placement.rangetable import node_draws
 from placement.simselect import SearchOptions
@@ -123,7 +123,7 @@ def seed_then_pso(
         beside it); rerunning with the same arguments resumes.
     callback : ``callback(PSOResult-like state)`` after every swarm iteration.
     progress : tqdm progress bars on stderr for every long phase (True), none (False), or
-        a callable ``progress(phase, done, total)`` (:mod:`placement.progress`).
+        a callable ``progress(phase, done, total)`` (:mod:`analysis.progress`).
     """
     planner = Planner(room, M, system=system, cost=cost, initial=initial, search=search,
                       swarm=swarm,

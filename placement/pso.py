@@ -33,8 +33,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from analysis.progress import CountingBar, check_progress
 from placement import ties
-from placement.progress import CountingBar, check_progress
 from placement.result import LayoutResult
 from placement.serialization import fingerprint, write_json_atomic
 from placement.surfaces import MAX_ANCHORS, project, random_layout

@@ -17,7 +17,7 @@ receiver assumes, and the anchors are mounted with more or less care.
 
 Every figure simulates the plan's system (its chirp, receiver and positioning; default the
 paper's). Every figure is reproducible from ``rng`` (an int seed, a Generator drawn once,
-or None). ``progress`` shows each table's simulations (:mod:`placement.progress`).
+or None). ``progress`` shows each table's simulations (:mod:`analysis.progress`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from analysis.coverage import covered_share
-from placement.progress import ProgressBar, check_progress
+from analysis.progress import ProgressBar, check_progress
 from placement.validation import mounted_errors, summary
 from simulation import checks, streams
 from simulation.evaluation import RangingScene, evaluate_layout

@@ -228,6 +228,16 @@ def test_a_penalized_starting_layouts_cost_says_what_it_means(tmp_path, monkeypa
     assert "1.2e+14" not in body and "1.1e+12" not in body
 
 
+def test_a_reports_simulations_report_their_progress(tmp_path):
+    write_result(tmp_path, history=False)
+    calls = []
+    rp.build_report(tmp_path, realizations=1, dpi=20, progress=lambda *c: calls.append(c))
+    # the optimized layout (its per-axis errors) and the corners layout, one step each
+    assert calls == [("report simulations", 0, 2), ("report simulations", 1, 2)]
+    with pytest.raises(ValueError, match="progress"):
+        rp.build_report(tmp_path, realizations=1, progress="yes")
+
+
 def test_report_without_simulator_skips_simulated_figures(tmp_path, monkeypatch):
     monkeypatch.setattr(rp, "_evaluator", lambda: None)
     write_result(tmp_path, validation=False, history=False)

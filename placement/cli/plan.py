@@ -269,7 +269,7 @@ def prepare(args):
 
 def run(args, progress=None) -> int:
     """Run ``anchorplan plan`` on parsed ``args``; the exit status (0: done). ``progress``:
-    a callable ``progress(phase, done, total)`` instead of the bars (:mod:`placement.progress`)."""
+    a callable ``progress(phase, done, total)`` instead of the bars (:mod:`analysis.progress`)."""
     from placement.plan import seed_then_pso
 
     out, room, system, opts = prepare(args)

@@ -42,6 +42,7 @@ def register(sub) -> None:
     )
     p.add_argument("--dpi", type=float, default=100, help="resolution of the figures (100)")
     p.add_argument("--figures", metavar="DIR", help="also write every figure as a PNG here")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)
 
 
@@ -85,6 +86,7 @@ def run(args) -> int:
             sigma=args.sigma,
             dpi=args.dpi,
             figures_dir=args.figures,
+            progress=not args.no_progress,
         )
     except ValueError as exc:
         raise _refused(result_dir, exc) from None

@@ -20,7 +20,7 @@ WRITE_INTERVAL = 0.25
 
 
 class ProgressFile:
-    """``progress(phase, done, total)`` (:mod:`placement.progress`) kept as
+    """``progress(phase, done, total)`` (:mod:`analysis.progress`) kept as
     ``{"phases": {phase: [done, total]}, "order": [...], "current": phase}`` in a JSON
     file, written at a phase's start and end and at most every :data:`WRITE_INTERVAL` s."""
 

@@ -1,10 +1,10 @@
-"""Progress of the planner's long phases: tqdm bars on stderr, a caller's function, or
-nothing.
+"""Progress of the long phases (a plan's, a report's simulations, the what-if tables):
+tqdm bars on stderr, a caller's function, or nothing.
 
 ``progress`` is True (tqdm bars), False (silent) or a callable
-``progress(phase, done, total)`` called from the planning process (``phase`` a str such as
-"range table", "search", "swarm", "refinement", "finalists", "validation"; ``done`` and
-``total`` ints): what a page or a log shows instead of bars.
+``progress(phase, done, total)`` called from the working process (``phase`` a str such as
+"range table", "search", "swarm", "refinement", "finalists", "validation", "report
+simulations"; ``done`` and ``total`` ints): what a page or a log shows instead of bars.
 """
 
 from __future__ import annotations
