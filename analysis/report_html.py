@@ -281,7 +281,7 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
                 _mean_finite(s.dop_rms if s else None),
                 _num(pb["mean"]),
                 _num(pb["p95"]),
-                _e(penalty_text(e.cost)) if penalty_text(e.cost) else _num(e.cost, 4),
+                _e(p) if (p := penalty_text(e.cost)) else _num(e.cost, 4),
             ]
         )
     return rows

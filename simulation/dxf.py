@@ -36,7 +36,7 @@ UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
 INSUNITS = {"mm": 4, "cm": 5, "m": 6}
 #: the layers written by :func:`write_plan` (and read by default)
 LAYERS = ("room", "obstacles", "keepouts", "zones", "anchors")
-#: a box's label as :func:`write_plan` writes it: "NAME z Z0-Z1 m" (heights in m)
+#: a box's label as :func:`_label` writes it: "NAME z Z0-Z1 m" (heights in m)
 LABEL = re.compile(
     r"^(?P<name>.*) z (?P<z0>[0-9.]+(?:e-?[0-9]+)?)-(?P<z1>[0-9.]+(?:e[-+]?[0-9]+)?) m$"
 )
@@ -176,11 +176,16 @@ def room_from_dxf(
     return Room.from_corners(corners, h, obstacles=obstacles, **kw)
 
 
+def _label(name: str, z0: float, z1: float) -> str:
+    """A box's label, "NAME z Z0-Z1 m" (heights in m), as :data:`LABEL` reads it back."""
+    return f"{name} z {z0:g}-{z1:g} m"
+
+
 def _box_outline(msp, box, layer: str, label: str, scale: float) -> None:
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(box[0]) / scale, np.asarray(box[1]) / scale)
     msp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
                        dxfattribs={"layer": layer})  # fmt: skip
-    text = f"{label} z {z0 * scale:g}-{z1 * scale:g} m"
+    text = _label(label, z0 * scale, z1 * scale)
     msp.add_text(text, height=0.08 / scale, dxfattribs={"layer": layer}).set_placement((x0, y0))
 
 

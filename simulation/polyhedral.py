@@ -457,7 +457,7 @@ def blocking_map(room) -> tuple:
 def facing(room, layouts) -> np.ndarray:
     """(L, M, F) bool: face f of the room's map (:func:`blocking_map`, F faces) can block a
     straight path to anchor j of ``layouts`` (L, M, 3) m, for :func:`sees_near`'s
-    ``facing``: the anchor lies on the face's air side. A path from an anchor in the air
+    ``front``: the anchor lies on the face's air side. A path from an anchor in the air
     that crosses anything of the room leaves the air first through a face the anchor lies
     in front of, so a face behind the anchor never decides whether the path is blocked
     (the answers are those of all faces). An anchor outside the air (outside the room or

@@ -249,6 +249,12 @@ def range_std(range_errors) -> np.ndarray:
 
 
 # -- dilution of precision ----------------------------------------------------------------------
+#: (m) a node whose ranges vary by at most this over the realizations has no DOP (+inf): a
+#: receiver that picks the same sample every time leaves only the rounding of equal values
+#: (about 1e-17 m), and a ratio to it is not a dilution of anything
+RANGE_STD_FLOOR = 1e-9
+
+
 def _ratio(errors, range_errors, spread: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
     e = checks.reals("errors", errors, finite=False)
     r = checks.reals("range_errors", range_errors, finite=False)
@@ -261,12 +267,6 @@ def _ratio(errors, range_errors, spread: Callable[[np.ndarray], np.ndarray]) -> 
     out = np.full(sigma_r.shape, np.inf)
     np.divide(spread(e), sigma_r, out=out, where=sigma_r > RANGE_STD_FLOOR)
     return out
-
-
-#: (m) a node whose ranges vary by at most this over the realizations has no DOP (+inf): a
-#: receiver that picks the same sample every time leaves only the rounding of equal values
-#: (about 1e-17 m), and a ratio to it is not a dilution of anything
-RANGE_STD_FLOOR = 1e-9
 
 
 def dop(errors, range_errors) -> np.ndarray:
