@@ -227,10 +227,10 @@ _AXES = "xyz"
 
 def _draw_room2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
     """A polygonal room's floor plan (outline, the outside of it blanked) in a plan view,
-    and the obstacles (cross-hatched, their height written on them in a plan view)
-    projected onto the (iu, iv) plane. On a slice, ``cut`` (axis, value) its plane, an
-    obstacle the plane does not cut (a duct above a slice at tag height) is its dashed
-    outline only: the map under it is the slice's."""
+    and the obstacles (cross-hatched; in a plan view their heights written on them, once
+    per solid: :func:`_labelled`) projected onto the (iu, iv) plane. On a slice, ``cut``
+    (axis, value) its plane, an obstacle the plane does not cut (a duct above a slice at
+    tag height) is its dashed outline only: the map under it is the slice's."""
     from matplotlib.patches import PathPatch, Rectangle
     from matplotlib.path import Path as MPath
 
@@ -253,10 +253,41 @@ def _draw_room2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
                  else dict(facecolor="none", linestyle="--", gid="off-slice"))  # fmt: skip
         ax.add_patch(Rectangle((lo[iu], lo[iv]), hi[iu] - lo[iu], hi[iv] - lo[iv],
                                edgecolor="black", linewidth=0.8, zorder=2.6, **style))  # fmt: skip
-        if (iu, iv) == (0, 1):
-            ax.annotate(_obstacle_heights(lo, hi), ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2),
-                        fontsize=6, ha="center", va="center", color="white" if solid else "black",
-                        zorder=2.7)  # fmt: skip
+    if (iu, iv) != (0, 1):
+        return
+    for ob in _labelled(room.obstacles):
+        lo, hi = ob.lo, ob.hi
+        # dark on a white tag: legible on the hatch, and beside a box thinner than it
+        ax.annotate(_obstacle_heights(lo, hi), ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2),
+                    fontsize=6, ha="center", va="center", color="black", zorder=2.7,
+                    bbox=dict(boxstyle="round,pad=0.15", facecolor="white", alpha=0.8,
+                              edgecolor="none"))  # fmt: skip
+
+
+def _labelled(obstacles) -> list:
+    """The obstacles a plan view writes heights on: of the boxes that meet side by side
+    with the same bottom and top (a pillar, a counter described as several boxes), only
+    the largest footprint, so that one solid gets one label."""
+    obstacles = list(obstacles)
+    group = list(range(len(obstacles)))
+    for i, a in enumerate(obstacles):
+        for j in range(i):
+            b = obstacles[j]
+            if _same_solid(a, b):
+                old, new = group[i], group[j]
+                group = [new if g == old else g for g in group]
+    area = [(ob.hi[0] - ob.lo[0]) * (ob.hi[1] - ob.lo[1]) for ob in obstacles]
+    best = {}
+    for i, g in enumerate(group):  # the first of equal areas: stable
+        if g not in best or area[i] > area[best[g]]:
+            best[g] = i
+    return [obstacles[i] for i in sorted(best.values())]
+
+
+def _same_solid(a, b, tol: float = 1e-9) -> bool:
+    """Boxes a and b have the same bottom and top and their footprints touch."""
+    same_z = abs(a.lo[2] - b.lo[2]) <= tol and abs(a.hi[2] - b.hi[2]) <= tol
+    return same_z and all(a.lo[k] <= b.hi[k] + tol and b.lo[k] <= a.hi[k] + tol for k in (0, 1))
 
 
 def _obstacle_heights(lo, hi) -> str:
@@ -284,6 +315,7 @@ def _draw_regions2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
     """Keep-outs (hatched grey) and tag zones (dashed) projected onto the (iu, iv) plane,
     with a polygonal room's outline and its obstacles (:func:`_draw_room2d`; ``cut`` a
     slice's plane)."""
+    from matplotlib.patches import Polygon as MPolygon
     from matplotlib.patches import Rectangle
 
     _draw_room2d(ax, room, iu, iv, cut)
@@ -316,6 +348,10 @@ def _draw_regions2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
                     gid="zones",
                 )
             ax.add_patch(patch)
+            if not keepout and not room.is_shoebox and (iu, iv) == (0, 1):
+                # a zone box over a floor plan that is not a rectangle holds nodes only
+                # inside the plan: its outline is drawn there
+                patch.set_clip_path(MPolygon(room.floor_corners, transform=ax.transData))
 
 
 def peb_plane(
@@ -534,7 +570,9 @@ def coverage_map(
 
 
 def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black") -> None:
-    """Anchors projected onto the (iu, iv) plane as squares numbered 1…M (row order)."""
+    """Anchors projected onto the (iu, iv) plane as squares numbered 1…M (row order);
+    anchors that the projection puts on one spot (three on one vertical line of a wall,
+    seen from above) share one label, "2,3,4" (:func:`_stacks`)."""
     ax.scatter(
         anchors[:, iu],
         anchors[:, iv],
@@ -547,10 +585,10 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
         gid="anchors",
         clip_on=False,
     )
-    for j, a in enumerate(anchors):
+    for stack in _stacks(anchors[:, [iu, iv]]):
         ax.annotate(
-            str(j + 1),
-            (a[iu], a[iv]),
+            ",".join(str(j + 1) for j in stack),
+            tuple(anchors[stack[0], [iu, iv]]),
             xytext=(5, 4),
             textcoords="offset points",
             fontsize=8,
@@ -559,6 +597,21 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
             path_effects=_outline(),
             annotation_clip=False,
         )
+
+
+#: (m) projected anchors closer than this share a label: their squares cover each other
+STACKED = 0.05
+
+
+def _stacks(points) -> list[list[int]]:
+    """The groups of the projected anchors points (M, 2) m that lie within
+    :data:`STACKED` of each other (linked in chains), each in row order, ordered by its
+    first row."""
+    near = np.linalg.norm(points[:, None] - points[None], axis=-1) <= STACKED
+    group = np.arange(len(points))
+    for _ in range(len(points)):  # a chain of M is joined within M passes
+        group = np.min(np.where(near, group[None], group[:, None]), axis=1)
+    return [np.flatnonzero(group == g).tolist() for g in np.unique(group)]
 
 
 #: a surface whose normal's component along the view is at most this is seen edge-on

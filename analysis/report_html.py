@@ -275,7 +275,11 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
                 str(len(e.anchors)),
                 _e(s.source if s else "not simulated"),
                 str(s.realizations) if s else "–",
-                *(_num(s.stats[k]) if s else "–" for k in ("std", "mean", "p95", "rms")),
+                # what a user's tags see first, then the paper's σ and the RMS
+                *(
+                    _num(s.stats.get(k)) if s else "–"
+                    for k in ("median", "mean", "p95", "std", "rms")
+                ),
                 _percent(s.stats.get("availability")) if s else "–",
                 _mean_finite(s.dop if s else None),
                 _mean_finite(s.dop_rms if s else None),
@@ -289,9 +293,9 @@ def _comparison_rows(ctx: Context) -> list[list[str]]:
 
 def _comparison_section(ctx: Context) -> list[str]:
     header = [
-        "layout", "M", "simulated errors from", "R", "σ (m)", "mean (m)", "P95 (m)",
-        "RMS (m)", "availability", "mean DOP (paper: σ/σ<sub>r</sub>)", "mean DOP<sub>RMS</sub> "
-        "(RMSE/σ<sub>r</sub>)", "mean PEB (m)", "P95 PEB (m)", "cost",
+        "layout", "M", "simulated errors from", "R", "median (m)", "mean (m)", "P95 (m)",
+        "σ (m)", "RMS (m)", "availability", "mean DOP (paper: σ/σ<sub>r</sub>)",
+        "mean DOP<sub>RMS</sub> (RMSE/σ<sub>r</sub>)", "mean PEB (m)", "P95 PEB (m)", "cost",
     ]  # fmt: skip
     naive = any(e.role == "comparison" for e in ctx.layouts)
     parts = [
@@ -373,8 +377,13 @@ def _gap_section(ctx: Context) -> list[str]:
     ]
 
 
+#: the columns of :func:`_stat_cells`
+STAT_HEADER = ["median (m)", "mean (m)", "P95 (m)", "σ (m)", "availability"]
+
+
 def _stat_cells(block: dict) -> list[str]:
-    return [_num(block.get(k)) for k in ("std", "mean", "p95")] + [
+    """median, mean, P95, then σ (a file of an earlier version has no median: "–")."""
+    return [_num(block.get(k)) for k in ("median", "mean", "p95", "std")] + [
         _percent(block.get("availability"))
     ]
 
@@ -389,7 +398,7 @@ def _held_out(v: dict, nominal: list[str], P: int) -> list[str]:
         rows.append([_e(name), _e(block.get("nodes", "–")), *_stat_cells(block)])
     return [
         "<h3>Held-out nodes</h3>",
-        _table(["nodes", "count", "σ (m)", "mean (m)", "P95 (m)", "availability"], rows, left=1),
+        _table(["nodes", "count", *STAT_HEADER], rows, left=1),
         '<p class="sub">The chosen layout simulated at nodes the optimizer did not use '
         "(grid: another grid of nodes; random: random points in the room), against the "
         "validation on the evaluation grid.</p>",
@@ -407,7 +416,7 @@ def _mounting(v: dict, nominal: list[str]) -> list[str]:
     return [
         "<h3>Mounting tolerance</h3>",
         _table(
-            ["anchors", "tolerance (m)", "draws", "σ (m)", "mean (m)", "P95 (m)", "availability"],
+            ["anchors", "tolerance (m)", "draws", *STAT_HEADER],
             rows,
         ),
         '<p class="sub">The layout with every anchor moved at random by up to the tolerance '

@@ -358,6 +358,52 @@ def test_a_slanted_wall_is_seen_edge_on_from_above_and_as_an_area_from_the_south
     assert "2.5–3 m" in [t.get_text() for t in plan.texts]
 
 
+def test_anchors_on_one_spot_of_a_view_share_a_label():
+    # three anchors on one vertical line of the south wall: one spot from above, three
+    # from the south
+    a = np.array([[1.0, 0.03, 1.0], [4.0, 0.03, 0.5], [4.0, 0.03, 1.5], [4.0, 0.03, 2.3],
+                  [4.02, 3.97, 2.0]])  # fmt: skip
+    plan, elevation = data_axes(F.plan_view(ROOM, a, figsize=(8, 3), dpi=40))
+    assert [t.get_text() for t in plan.texts] == ["1", "2,3,4", "5"]
+    assert [t.get_text() for t in elevation.texts] == ["1", "2", "3", "4", "5"]
+    # a chain of near spots is one stack; anchors 6 cm apart are not
+    chain = np.array([[0, 0], [0.04, 0], [0.08, 0], [1.0, 1.0], [1.06, 1.0]])
+    assert F._stacks(chain) == [[0, 1, 2], [3], [4]]
+
+
+def test_one_solid_of_several_boxes_gets_one_legible_height_label():
+    # a pillar of three boxes meeting face to face, a cabinet touching nothing, a duct
+    # touching the pillar's core but hung higher: three labels, dark on a light tag
+    room = Room(size=(8.0, 6.0, 3.0), obstacles=[
+        {"min": [3.9, 2.6, 0.0], "max": [4.1, 3.4, 3.0], "name": "core"},
+        {"min": [3.7, 2.9, 0.0], "max": [3.9, 3.1, 3.0], "name": "west"},
+        {"min": [4.1, 2.9, 0.0], "max": [4.3, 3.1, 3.0], "name": "east"},
+        {"min": [1.0, 1.0, 0.0], "max": [1.6, 1.4, 1.8], "name": "cabinet"},
+        {"min": [4.3, 2.0, 2.5], "max": [7.0, 2.4, 3.0], "name": "duct"}])  # fmt: skip
+    plan, _ = data_axes(F.plan_view(room, OTHER, figsize=(8, 3), dpi=40))
+    heights = [t for t in plan.texts if t.get_text().endswith(" m")]
+    assert sorted(t.get_text() for t in heights) == ["1.8 m", "2.5–3 m", "3 m"]
+    (pillar,) = (t for t in heights if t.get_text() == "3 m")
+    np.testing.assert_allclose(pillar.xy, (4.0, 3.0))  # on the largest box, the core
+    for t in heights:
+        assert t.get_color() == "black" and t.get_bbox_patch() is not None
+
+
+def test_a_zone_over_a_floor_plan_is_drawn_inside_the_plan_only():
+    # an L whose zone box covers the missing corner: its outline is clipped to the L
+    room = Room.from_corners([[0, 0], [6, 0], [6, 3], [3, 3], [3, 5], [0, 5]], 3.0,
+                             zones=[{"min": [0.5, 0.5, 1.0], "max": [5.5, 4.5, 1.5]}])  # fmt: skip
+    plan, elevation = data_axes(F.plan_view(room, OTHER, figsize=(8, 3), dpi=40))
+    (zone,) = (p for p in plan.patches if p.get_gid() == "zones")
+    clip = zone.get_clip_path()
+    assert clip is not None
+    corners = clip.get_fully_transformed_path().vertices
+    inv = plan.transData.inverted().transform(corners)
+    assert any(np.allclose(v, (3.0, 3.0), atol=1e-6) for v in inv)  # the L's inner corner
+    (side,) = (p for p in elevation.patches if p.get_gid() == "zones")
+    assert side.get_clip_path() is None  # from the south: the whole box
+
+
 def test_a_slice_draws_solid_only_the_obstacles_its_plane_cuts():
     # a cabinet up to 1.5 m and a duct from 2.5 m: the slice at 1 m cuts the cabinet only, the
     # one at 2.75 m the duct only; the other is its dashed outline, the map under it visible

@@ -198,6 +198,14 @@ def test_report_shows_the_plans_validation_sections(tmp_path, monkeypatch):
     assert "Held-out nodes" in body and "Mounting tolerance" in body
     for x in ("0.611", "0.722", "1.833", "150", "0.644", "200", "0.050", "20", "0.677", "1.899"):
         assert x in body
+    # what the tags see first, then σ; a file without the median shows "–" there
+    lead = "<th>median (m)</th><th>mean (m)</th><th>P95 (m)</th><th>σ (m)</th>"
+    assert rep.html.count(lead) == 3  # the comparison, held-out and mounting tables
+    assert '<td class="l">grid</td><td>150</td><td>–</td><td>0.722</td>' in rep.html
+    extra["held_out"]["grid"]["median"] = 0.533
+    write_result(tmp_path, history=False, extra=extra)
+    html = rp.build_report(tmp_path, dpi=30).html
+    assert '<td class="l">grid</td><td>150</td><td>0.533</td><td>0.722</td>' in html
     # malformed optional sections do not break the report
     extra = {"held_out": {"grid": "n/a"}, "mounting": 3}
     write_result(tmp_path, history=False, extra=extra)

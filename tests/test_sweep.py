@@ -173,3 +173,25 @@ def test_the_recommendation_reads_the_field_p95_where_there_is_one():
     rows = [row(20, 0.10, 0.41), row(22, 0.12, 0.19), row(24, 0.3, float("nan"))]
     assert recommend(rows, 0.2, 0.99, 0.95) == 22
     assert recommend(rows[2:], 0.35, 0.99, 0.95) == 24  # no field check: the nodes' P95
+
+
+def test_the_sweep_report_and_the_designs_table_lead_with_the_field_median():
+    from analysis.sweep_report import sweep_html
+    from placement.cli.sweep import design_table
+
+    row = {"M": 6, "std": 0.021, "mean": 0.009, "p95": 0.019, "availability": 1.0,
+           "held_out_std": 0.03, "mounting_std": 0.04, "seconds": 12.0,
+           "anchors": [[0, 0, 0]], "field_std": 0.3, "field_mean": 0.040, "field_p95": 0.080,
+           "field_median": 0.016}  # fmt: skip
+    old = {k: v for k, v in row.items() if k not in ("field_median", "field_mean")}
+    page = sweep_html({"rows": [row, {**old, "M": 8}], "room": {"name": "hall"}}, dpi=20)
+    assert "<th>M</th><th>field median / mean / P95 (m)</th><th>field σ (m)</th>" in page
+    assert "<td>6</td><td>0.016 / 0.040 / 0.080</td><td>0.300</td>" in page
+    assert "<td>8</td><td>– / – / 0.080</td>" in page  # a sweep without the median
+    designs = [{"design": "20ms-first-path", "samples_per_fix": 3840, **row},
+               {"design": "1ms-paper", "samples_per_fix": 192, **row,
+                "field_median": float("nan")}]  # fmt: skip
+    first, good, without = design_table(designs).splitlines()
+    assert first.split()[:4] == ["design", "M", "field", "median/mean/P95"]
+    assert good.split()[:3] == ["20ms-first-path", "6", "0.016/0.040/0.080"]
+    assert without.split()[2] == "–/0.040/0.080"

@@ -101,7 +101,10 @@ def test_the_room_file_list_names_the_files_and_selects_the_room_open(page):
 
 def test_drag_an_anchor_and_the_coverage_changes(page):
     before = page.locator("#covered-k").inner_text(), page.get_attribute("#k-line", "d")
-    assert float(_row(page, 6).split()[3]) == 2.97  # anchor 6: on the ceiling, west
+    # the seventh anchor, numbered 7 as in the report and the sheet: on the ceiling, west
+    assert _row(page, 6).split()[0] == "7"
+    assert page.locator('#plan .anchor[data-index="6"] .anchor-number').text_content() == "7"
+    assert float(_row(page, 6).split()[3]) == 2.97
     _drag(page, 6, (6.5, 1.5))  # to the ceiling of the bay's east end
     page.wait_for_function(
         "(() => { const c = document.querySelectorAll("
@@ -182,6 +185,9 @@ def test_a_slanted_wall_is_drawn_and_a_hanging_duct_labelled_with_its_heights(pa
     spans = sorted((round(abs(x2 - x1)) > 0, round(abs(y2 - y1)) > 0) for x1, y1, x2, y2 in lines)
     assert spans.count((True, True)) == 1  # the slanted wall: neither horizontal nor vertical
     assert "duct 2.5–3.0 m" in page.locator("#plan").text_content()
+    # its label dark with a white halo: legible on the box and on the floor beside it
+    label = page.locator("#plan .obstacle-label")
+    assert (label.get_attribute("fill"), label.get_attribute("stroke")) == ("#252525", "#fff")
     # the maps' slice at tag height does not cut the duct: its outline, the cells under it
     page.wait_for_selector("#plan .obstacle.off-slice", state="attached")
     assert page.locator("#plan .obstacle").count() == 1

@@ -172,7 +172,8 @@ function drawPlan() {
       : { fill: "none", stroke: "#252525", "stroke-dasharray": "6 3", class: "obstacle off-slice" });
     label(svg, f.px((o.min[0] + o.max[0]) / 2), f.py((o.min[1] + o.max[1]) / 2) + 4,
       `${o.name || "obstacle"} ${o.min[2] > 0 ? `${o.min[2].toFixed(1)}–` : ""}${o.max[2].toFixed(1)} m`,
-      { fill: cut ? "#fff" : "#252525" });
+      // dark with a white halo: legible on the box and beside one thinner than the text
+      { fill: "#252525", stroke: "#fff", "stroke-width": 3, "paint-order": "stroke", class: "obstacle-label" });
   }
   drawAnchors(svg, f, [0, 1], "plan");
 }
@@ -208,7 +209,8 @@ function drawAnchors(svg, f, axes, view) {
   state.anchors.forEach((a, index) => {
     const g = el("g", { class: "anchor", "data-index": index, "data-view": view }, svg);
     el("circle", { cx: f.px(a[i]), cy: f.py(a[j]), r: 9, fill: "#fff", stroke: "#b30000", "stroke-width": 3 }, g);
-    label(g, f.px(a[i]), f.py(a[j]) + 4, String(index), { "font-weight": "bold" });
+    // numbered from 1, as the report's figures and the mounting sheet (A1, A2, ...) number them
+    label(g, f.px(a[i]), f.py(a[j]) + 4, String(index + 1), { "font-weight": "bold", class: "anchor-number" });
     g.addEventListener("pointerdown", (ev) => startDrag(ev, svg, f, axes, index, view));
   });
 }
@@ -299,7 +301,7 @@ function drawAnchorTable() {
   body.innerHTML = "";
   state.anchors.forEach((a, i) => {
     const tr = document.createElement("tr");
-    tr.innerHTML = `<td>${i}</td><td>${a[0].toFixed(2)}</td><td>${a[1].toFixed(2)}</td><td>${a[2].toFixed(2)}</td><td><button type="button" data-remove="${i}" title="remove">✕</button></td>`;
+    tr.innerHTML = `<td>${i + 1}</td><td>${a[0].toFixed(2)}</td><td>${a[1].toFixed(2)}</td><td>${a[2].toFixed(2)}</td><td><button type="button" data-remove="${i}" title="remove">✕</button></td>`;
     body.appendChild(tr);
   });
   document.getElementById("anchor-count").textContent = `(${state.anchors.length})`;
