@@ -187,8 +187,11 @@ def elevation_svg(room: Room, frame: VerticalFrame, rows: list[Mount]) -> str:
             "end",
         )
     )
-    for k, r in enumerate(sorted(rows, key=lambda r: r.along)):
+    ordered = sorted(rows, key=lambda r: r.along)
+    for k, r in enumerate(ordered):
         x, y = X(r.along), Y(r.height)
+        # anchors above each other (one along): their heights' dimensions side by side
+        xh = x + 9 + 16 * sum(abs(q.along - r.along) <= STACKED for q in ordered[:k])
         yd = bottom + 30 + gap * k
         parts.append(_dim(X(0), yd, x, yd))
         parts.append(
@@ -204,14 +207,14 @@ def elevation_svg(room: Room, frame: VerticalFrame, rows: list[Mount]) -> str:
             f'<line x1="{x:.1f}" y1="{y:.1f}" x2="{x:.1f}" y2="{yd:.1f}" '
             'stroke="#8a939c" stroke-width="0.6" stroke-dasharray="3 3"/>'
         )
-        parts.append(_dim(x + 9, Y(frame.bottom), x + 9, y))
+        parts.append(_dim(xh, Y(frame.bottom), xh, y))
         parts.append(
             _text(
-                x + 13,
+                xh + 4,
                 (Y(frame.bottom) + y) / 2,
                 f"{r.height:.3f} m",
                 10,
-                extra=f'transform="rotate(-90 {x + 13:.1f} {(Y(frame.bottom) + y) / 2:.1f})"',
+                extra=f'transform="rotate(-90 {xh + 4:.1f} {(Y(frame.bottom) + y) / 2:.1f})"',
             )
         )
         parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="6" fill="#1f77b4" stroke="#fff"/>')
@@ -265,6 +268,7 @@ def plan_svg(room: Room, rows: list[Mount]) -> str:
     rx, ry = P(*corners[0])  # the ceiling's reference corner (placement.sheet)
     parts.append(f'<circle cx="{rx:.1f}" cy="{ry:.1f}" r="4" fill="#c0392b"/>')
     parts.append(_text(rx + 6, ry + 14, "reference corner (0, 0)", 10, extra='fill="#c0392b"'))
+    drawn: list = []  # wall anchors labelled so far: those above them share their label
     for r in rows:
         x, y = P(r.position[0], r.position[1])
         # labels on the side away from the nearer end of the drawing, so none leaves it
@@ -279,9 +283,27 @@ def plan_svg(room: Room, rows: list[Mount]) -> str:
                 f'<rect x="{x - 5:.1f}" y="{y - 5:.1f}" width="10" height="10" '
                 'fill="#2ca02c" stroke="#fff"/>'
             )
-            parts.append(_text(x + dx, y + 4, f"A{r.id}", 10, anchor))
+            _stack_label(parts, drawn, r, x + dx, y + 4, anchor)
     parts.append("</svg>")
     return "".join(parts)
+
+
+#: (m) wall anchors this close along a wall (one above the other) are stacked: the ceiling
+#: plan gives them one label ("A2, A3"), a wall's drawing their heights side by side
+STACKED = 0.05
+
+
+def _stack_label(parts: list, drawn: list, r, x: float, y: float, anchor: str) -> None:
+    """The ceiling plan's label of the wall anchor r at (x, y) px, or r's id added to the
+    label of an anchor drawn within :data:`STACKED` of it (``drawn``: [(position, ids,
+    index into parts, x, y, anchor)])."""
+    for d in drawn:
+        if np.linalg.norm(np.asarray(d[0][:2]) - np.asarray(r.position[:2])) <= STACKED:
+            d[1].append(r.id)
+            parts[d[2]] = _text(d[3], d[4], ", ".join(f"A{i}" for i in d[1]), 10, d[5])
+            return
+    drawn.append((r.position, [r.id], len(parts), x, y, anchor))
+    parts.append(_text(x, y, f"A{r.id}", 10, anchor))
 
 
 def _page(title: str, sub: str, body: str) -> str:

@@ -94,6 +94,24 @@ def test_the_sheet_has_a_page_per_wall_with_anchors_and_valid_drawings(tmp_path)
     assert "windows" in html and "door" in html  # the keep-outs against the walls
 
 
+def test_anchors_above_each_other_on_a_wall_are_drawn_apart(tmp_path):
+    # three anchors at one point of the office's south wall, at three heights, and one
+    # elsewhere: the ceiling plan labels the three once; the wall's drawing gives each
+    # height its own dimension line
+    room = Room.from_toml("../examples/office.toml")
+    a = np.array([[3.0, 0.03, 0.5], [3.0, 0.03, 1.5], [3.0, 0.03, 2.5], [7.0, 5.97, 2.2]])
+    html = write_sheet(tmp_path, room, a)["html"].read_text()
+    plan, south = (s.split("</svg>")[0] for s in html.split("<svg")[1:3])
+    texts = [t.text for t in ET.fromstring("<svg" + plan + "</svg>").iter() if t.text]
+    assert "A1, A2, A3" in texts and "A1" not in texts and "A4" in texts
+    tree = ET.fromstring("<svg" + south + "</svg>")
+    heights = [t for t in tree.iter() if t.text and t.text.endswith(" m") and "A" not in t.text
+               and "rotate(-90" in t.get("transform", "")]  # fmt: skip
+    assert sorted(t.text for t in heights) == ["0.500 m", "1.500 m", "2.500 m"]
+    xs = sorted(float(t.get("x")) for t in heights)
+    assert min(np.diff(xs)) >= 14  # side by side, not over each other (10 px text)
+
+
 def test_the_sheet_command_and_bad_input(tmp_path, capsys):
     room = Room.techtile()
     a = np.array([[1.0, 0.03, 2.0], [7.0, 3.97, 2.0], [4.0, 0.03, 1.0], [4.0, 3.0, 2.37]])
