@@ -6,7 +6,9 @@ closed axis-aligned rectangles on another (default ``obstacles``), standing from
 to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
 (as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Coordinates are converted
 from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and shifted so that the
-outline's lowest x and y are 0, the room's origin. An axis-aligned rectangular outline
+outline's lowest x and y are 0, the room's origin (a warning on the ``simulation.dxf``
+logger gives the shift where there is one: positions in the room, a layout's anchors
+among them, are the drawing's minus that shift). An axis-aligned rectangular outline
 gives the shoebox of its size, any other outline a polygonal room
 (:meth:`Room.from_corners`).
 
@@ -21,6 +23,7 @@ back (not their absorption or whether anchors may go on them: the drawing has ne
 
 from __future__ import annotations
 
+import logging
 import re
 from pathlib import Path
 
@@ -29,6 +32,8 @@ import numpy as np
 from simulation import checks
 from simulation.output import write_with
 from simulation.room import SIZE_RANGE, Room
+
+logger = logging.getLogger(__name__)
 
 #: the drawing units read and written, in metres per unit
 UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
@@ -135,6 +140,27 @@ def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, flo
             for lo, _ in footprints]  # fmt: skip
 
 
+def outline_origin(path, *, layer: str = "room", unit: str = "m") -> np.ndarray:
+    """(2,) m: the point of the drawing ``path`` that becomes the room's origin (the lowest
+    x and y of its outline on ``layer``; module docstring)."""
+    checks.choice("unit", unit, list(UNITS))
+    outlines = _polylines(_doc(path), layer)
+    if not outlines:
+        raise ValueError(f"layer: no polyline on layer {layer!r} in {path}")
+    return outlines[0][0].min(axis=0) * UNITS[unit]
+
+
+def _say_shift(path, layer, unit) -> None:
+    """A warning where the drawing's outline does not start at its origin."""
+    o = outline_origin(path, layer=layer, unit=unit)
+    if np.any(np.abs(o) > 1e-9):
+        logger.warning(
+            "%s: the floor plan is moved by (%.3f, %.3f) m so that its lowest x and y are 0: "
+            "positions in this room (a layout's anchors among them) are the drawing's "
+            "coordinates minus (%.3f, %.3f) m", path, -o[0], -o[1], o[0], o[1],
+        )  # fmt: skip
+
+
 def room_from_dxf(
     path,
     height: float,
@@ -167,6 +193,7 @@ def room_from_dxf(
         obstacles.append({"min": [lo[0], lo[1], lab[1]], "max": [hi[0], hi[1], lab[2]],
                           "name": lab[0]})  # fmt: skip
     kw.setdefault("name", Path(str(path)).stem)
+    _say_shift(path, layer, unit)
     size = corners.max(axis=0)
     rectangle = len(corners) == 4 and np.all(
         np.isclose(corners[:, 0], 0.0) | np.isclose(corners[:, 0], size[0])

@@ -377,9 +377,11 @@ def _check_workers(workers) -> None:
         )
 
 
-def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, workers, noise):
+def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, workers, noise,
+                 progress=None):  # fmt: skip
     """(R, P, M) ranges and statuses; realization r from ``SeedSequence(seed).spawn(R)[r]``,
-    ``chunk`` realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise)."""
+    ``chunk`` realizations at a time (default: :data:`NOISE_BUDGET_BYTES` of noise), each
+    chunk reported to ``progress(done, total)`` (realizations) when it is given."""
     P, M = scene.shape
     if chunk is None:
         chunk = max(1, NOISE_BUDGET_BYTES // (P * M * scene.receiver.window * 8))
@@ -392,6 +394,8 @@ def _draw_ranges(scene: RangingScene, seed: int, realizations: int, chunk, worke
             rngs = [np.random.default_rng(s) for s in children[i : i + chunk]]
             part = slice(i, i + len(rngs))
             ranges[part], status[part] = scene.draw_batch(rngs, noise=noise)
+            if progress is not None:
+                progress(part.stop, realizations)
     return ranges, status
 
 
@@ -408,6 +412,7 @@ def evaluate_layout(
     chunk: int | None = None,
     precision: str = DEFAULT_PRECISION,
     workers: int | None = None,
+    progress=None,
 ) -> Evaluation:
     """Simulate ``realizations`` noisy range sets for every node and locate the nodes.
 
@@ -422,7 +427,10 @@ def evaluate_layout(
     (default float32, :data:`~simulation.receiver.DEFAULT_PRECISION`; "float64" gives
     the reference chain's index exactly, see :class:`~simulation.receiver.Dsp`). ``workers``
     threads run the FFTs (results do not depend on it; ``-1``: all cores; None: the
-    ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``).
+    ``scipy.fft`` default, 1 unless set with ``scipy.fft.set_workers``). ``progress``, a
+    callable ``progress(done, total)``, is told the realizations simulated so far after
+    each chunk (the long phase: a realization of a thousand nodes takes seconds); None:
+    nothing is reported.
 
     ``rng`` (an int seed, default 0; a numpy ``Generator``, drawn once; or None, fresh
     entropy) gives the integer seed s of the noise streams (see the module docstring),
@@ -438,6 +446,10 @@ def evaluate_layout(
     if chunk is not None:
         chunk = checks.count("chunk", chunk, low=1)
     _check_workers(workers)
+    if progress is not None and not callable(progress):
+        raise ValueError(
+            f"progress: expected a callable progress(done, total) or None, got {progress!r}"
+        )
     n_nodes = len(room.grid()) if nodes is None else len(room.check_nodes(nodes))
     checks.check_size(
         "realizations",
@@ -446,7 +458,7 @@ def evaluate_layout(
         hint=f"{n_nodes} nodes x {len(anchors)} anchors per realization; use fewer",
     )
     scene = RangingScene(room, anchors, nodes, system=system, snr_db=snr_db, precision=precision)
-    ranges, status = _draw_ranges(scene, seed, realizations, chunk, workers, noise)
+    ranges, status = _draw_ranges(scene, seed, realizations, chunk, workers, noise, progress)
     fix = system.positioning.locate(room, anchors, ranges, full_output=True)
     errors = statistics.euclidean_errors(fix.x, scene.nodes)
     return Evaluation(

@@ -664,9 +664,10 @@ class Room:
             where = (
                 f"[0, {self.size[0]}] x [0, {self.size[1]}] x [0, {self.size[2]}] m"
                 if self.is_shoebox
-                else f"the floor plan {self.floor_corners.tolist()} from z = 0 to {self.size[2]} m"
+                else f"the floor plan {np.round(self.floor_corners, 3).tolist()} (m) from "
+                f"z = 0 to {self.size[2]:g} m"
             )
-            raise ValueError(f"anchors: anchor(s) {bad} lie outside the room {where}")
+            raise ValueError(f"anchors: anchor(s) {bad} lie outside the room: {where}")
         hits = in_boxes(self.keepouts, a)  # (M, B)
         if np.any(hits):
             bad = np.flatnonzero(hits.any(axis=1))

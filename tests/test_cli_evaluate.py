@@ -36,6 +36,10 @@ def test_evaluate_writes_statistics(tmp_path, capsys):
     out2 = tmp_path / "run2"
     assert main([*args, "--out", str(out2)]) == 0
     assert json.loads((out2 / "evaluation.json").read_text())["errors"] == data["errors"]
+    # a bar per realization on stderr, none with --no-progress
+    assert "noise realizations" in capsys.readouterr().err
+    assert main([*args, "--out", str(tmp_path / "run3"), "--no-progress"]) == 0
+    assert "noise realizations" not in capsys.readouterr().err
 
 
 def test_evaluate_with_room_file(tmp_path):

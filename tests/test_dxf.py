@@ -40,6 +40,25 @@ def test_a_rectangle_in_millimetres_is_the_shoebox_in_metres(tmp_path):
     )
 
 
+def test_a_drawing_away_from_the_origin_says_how_far_it_moved(tmp_path, caplog):
+    """The room's origin is the outline's lowest corner: the shift is a warning (a layout in
+    the drawing's coordinates would lie elsewhere in the room), and none at the origin."""
+    from simulation.dxf import outline_origin
+
+    rect = [(1500, 2500), (9500, 2500), (9500, 6500), (1500, 6500)]
+    path = _drawing(tmp_path / "box.dxf", [("room", rect, True)])
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room_from_dxf(path, 2.4, unit="mm")
+    np.testing.assert_allclose(outline_origin(path, unit="mm"), [1.5, 2.5])
+    (record,) = caplog.records
+    assert "moved by (-1.500, -2.500) m" in record.getMessage()
+    caplog.clear()
+    at_origin = _drawing(tmp_path / "lab.dxf", [("room", L_CORNERS, True)])
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room_from_dxf(at_origin, 3.0)
+    assert not caplog.records
+
+
 def test_a_polygon_outline_and_obstacles(tmp_path):
     """An L in centimetres with two rectangles on the obstacle layer: the polygonal room of
     those corners with two boxes of the given height."""

@@ -67,6 +67,19 @@ def test_same_seed_same_result_whatever_the_chunking():
     assert not np.array_equal(e5.ranges[0], e1.ranges[0])
 
 
+def test_progress_is_told_each_chunk_and_changes_nothing():
+    a = ROOM.corners_layout()
+    nodes = ROOM.grid()[::6]
+    calls = []
+    e1 = evaluate_layout(ROOM, a, realizations=3, rng=4, nodes=nodes, chunk=2,
+                         progress=lambda done, total: calls.append((done, total)))  # fmt: skip
+    assert calls == [(2, 3), (3, 3)]
+    e2 = evaluate_layout(ROOM, a, realizations=3, rng=4, nodes=nodes, chunk=2)
+    assert np.array_equal(e1.estimates, e2.estimates)
+    with pytest.raises(ValueError, match="progress: expected a callable"):
+        evaluate_layout(ROOM, a, realizations=1, nodes=nodes, progress=True)
+
+
 def test_rng_int_reproduces_the_former_seed_streams():
     """rng=s draws realization r from SeedSequence(s).spawn(R)[r], exactly as seed=s did."""
     a = ROOM.corners_layout()

@@ -36,6 +36,7 @@ def register(sub) -> None:
     )
     add_room_argument(p)
     p.add_argument("--realizations", type=int, default=1, help="noise realizations R (1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--seed", type=int, default=0, help="random seed (0)")
     p.add_argument(
         "--snr", type=float, default=30.0, help="SNR in dB at each anchor's closest node (30)"
@@ -47,6 +48,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     """Run ``anchorplan evaluate`` on parsed ``args``; the exit status (0: done)."""
+    from analysis.progress import ProgressBar
     from simulation import evaluate_layout
     from simulation.evaluation import BYTES_PER_RANGE
     from simulation.noise import check_snr
@@ -65,8 +67,12 @@ def run(args) -> int:
         hint="use fewer realizations",
     )
     t0 = time.perf_counter()
-    ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed,
-                         snr_db=args.snr, system=system)  # fmt: skip
+    bar = ProgressBar(not args.no_progress, "noise realizations")
+    try:
+        ev = evaluate_layout(room, anchors, realizations=args.realizations, rng=args.seed,
+                             snr_db=args.snr, system=system, progress=bar.update)  # fmt: skip
+    finally:
+        bar.close()
     seconds = time.perf_counter() - t0
     data = ev.to_dict()
     data["seconds"] = seconds
