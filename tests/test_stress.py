@@ -81,3 +81,23 @@ def test_the_stress_command(tmp_path, capsys):
     assert main(["stress", str(tmp_path / "none")]) == 2
     with pytest.raises(ValueError, match="anchors"):
         stress(ROOM, A[:4])
+
+
+def test_the_worst_anchor_is_the_largest_error_tail_a_missing_fix_beyond_any():
+    """A loss that leaves a tenth of the tags 14 m off is worse than one that leaves 0.4 %
+    without a fix (an L-shaped corridor's end anchor against one of its leg's); more than
+    5 % without a fix is worse than any error."""
+    from placement.stress import _tail, _worst
+
+    small = np.full(1000, 0.02)
+    metres = small.copy()
+    metres[:100] = 14.0
+    few_missing = small.copy()
+    few_missing[:4] = np.nan
+    many_missing = small.copy()
+    many_missing[:60] = np.nan
+    assert (_tail(metres), _tail(few_missing), _tail(many_missing)) == (14.0, 0.02, np.inf)
+    rows = [{"availability": 1.0, "mean": 1.4}, {"availability": 0.996, "mean": 0.02}]
+    assert _worst(rows, [_tail(metres), _tail(few_missing)]) == 0
+    rows.append({"availability": 0.94, "mean": 0.02})
+    assert _worst(rows, [_tail(metres), _tail(few_missing), _tail(many_missing)]) == 2
