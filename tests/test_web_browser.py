@@ -184,10 +184,36 @@ def test_a_slanted_wall_is_drawn_and_a_hanging_duct_labelled_with_its_heights(pa
     assert len(lines) == 4  # every wall's allowed rectangle, seen from above, the slanted one too
     spans = sorted((round(abs(x2 - x1)) > 0, round(abs(y2 - y1)) > 0) for x1, y1, x2, y2 in lines)
     assert spans.count((True, True)) == 1  # the slanted wall: neither horizontal nor vertical
-    assert "duct 2.5–3.0 m" in page.locator("#plan").text_content()
+    assert "duct 2.5–3 m" in page.locator("#plan").text_content()
     # its label dark with a white halo: legible on the box and on the floor beside it
     label = page.locator("#plan .obstacle-label")
     assert (label.get_attribute("fill"), label.get_attribute("stroke")) == ("#252525", "#fff")
     # the maps' slice at tag height does not cut the duct: its outline, the cells under it
     page.wait_for_selector("#plan .obstacle.off-slice", state="attached")
     assert page.locator("#plan .obstacle").count() == 1
+
+
+def test_a_solid_of_several_boxes_is_labelled_once_and_a_zone_kept_in_the_plan(page, tmp_path):
+    # an L whose zone box covers the missing corner; a pillar of three boxes meeting face to
+    # face and a 0.45 m bench
+    room = tmp_path / "pillar.toml"
+    room.write_text(
+        'name = "pillar"\ncorners = [[0, 0], [8, 0], [8, 4], [4, 4], [4, 7], [0, 7]]\n'
+        "height = 3.0\n"
+        '[[obstacle]]\nname = "core"\nmin = [1.9, 1.6, 0.0]\nmax = [2.1, 2.4, 3.0]\n'
+        '[[obstacle]]\nname = "west"\nmin = [1.7, 1.9, 0.0]\nmax = [1.9, 2.1, 3.0]\n'
+        '[[obstacle]]\nname = "east"\nmin = [2.1, 1.9, 0.0]\nmax = [2.3, 2.1, 3.0]\n'
+        '[[obstacle]]\nname = "bench"\nmin = [5.0, 1.0, 0.0]\nmax = [6.5, 1.4, 0.45]\n'
+        "[[zone]]\nmin = [0.5, 0.5, 1.0]\nmax = [7.5, 6.5, 1.5]\n"
+    )
+    page.set_input_files("#room-upload", str(room))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('pillar')")
+    labels = page.locator("#plan .obstacle-label").all_text_contents()
+    assert sorted(labels) == ["bench 0.45 m", "core 3 m"]
+    assert page.locator("#plan .obstacle").count() == 4  # every box drawn
+    clip = page.locator("#plan .zone").get_attribute("clip-path")
+    assert clip == "url(#plan-clip)"
+    corners = page.evaluate(
+        "document.querySelector('#plan-clip polygon').getAttribute('points').split(' ').length"
+    )
+    assert corners == 6  # the L's outline

@@ -160,7 +160,10 @@ function drawPlan() {
     el("line", { x1: f.px(ends[0][0]), y1: f.py(ends[0][1]), x2: f.px(ends[1][0]), y2: f.py(ends[1][1]),
       stroke: "#2b8cbe", "stroke-width": 4, "stroke-opacity": 0.6 }, walls);
   }
-  for (const z of r.zones) boxOutline(svg, f, z, [0, 1], { fill: "none", stroke: "#3182bd", "stroke-width": 1.5, "stroke-dasharray": "8 4" });
+  // a zone box holds nodes only inside the floor plan: its outline is drawn there
+  const clip = el("clipPath", { id: "plan-clip" }, el("defs", {}, svg));
+  el("polygon", { points: pts }, clip);
+  for (const z of r.zones) boxOutline(svg, f, z, [0, 1], { fill: "none", stroke: "#3182bd", "stroke-width": 1.5, "stroke-dasharray": "8 4", "clip-path": "url(#plan-clip)", class: "zone" });
   for (const k of r.keepouts) boxOutline(svg, f, k, [0, 1], { fill: "#e31a1c", "fill-opacity": 0.25, stroke: "#e31a1c" });
   // an obstacle the maps' slice does not cut (a duct above the tags) is its dashed outline:
   // the cells under it are the slice's
@@ -170,12 +173,39 @@ function drawPlan() {
     boxOutline(svg, f, o, [0, 1], cut
       ? { fill: "#636363", "fill-opacity": 0.85, stroke: "#252525", class: "obstacle" }
       : { fill: "none", stroke: "#252525", "stroke-dasharray": "6 3", class: "obstacle off-slice" });
+  }
+  for (const o of labelled(r.obstacles)) {
     label(svg, f.px((o.min[0] + o.max[0]) / 2), f.py((o.min[1] + o.max[1]) / 2) + 4,
-      `${o.name || "obstacle"} ${o.min[2] > 0 ? `${o.min[2].toFixed(1)}–` : ""}${o.max[2].toFixed(1)} m`,
+      `${o.name || "obstacle"} ${o.min[2] > 0 ? `${heightText(o.min[2])}–` : ""}${heightText(o.max[2])} m`,
       // dark with a white halo: legible on the box and beside one thinner than the text
       { fill: "#252525", stroke: "#fff", "stroke-width": 3, "paint-order": "stroke", class: "obstacle-label" });
   }
   drawAnchors(svg, f, [0, 1], "plan");
+}
+
+// a height as the figures write it: to the centimetre, without trailing zeros (0.45, 3)
+function heightText(v) {
+  return String(Number(v.toFixed(2)));
+}
+
+// the obstacles whose names and heights the plan writes: of boxes that meet side by side
+// with the same bottom and top (a pillar described as three boxes), only the largest
+// footprint, so that one solid gets one label (as the report's figures)
+function labelled(obstacles) {
+  const group = obstacles.map((_, i) => i);
+  const same = (a, b) => Math.abs(a.min[2] - b.min[2]) <= 1e-9 && Math.abs(a.max[2] - b.max[2]) <= 1e-9
+    && [0, 1].every((k) => a.min[k] <= b.max[k] + 1e-9 && b.min[k] <= a.max[k] + 1e-9);
+  obstacles.forEach((a, i) => {
+    for (let j = 0; j < i; j++) {
+      if (!same(a, obstacles[j])) continue;
+      const from = group[i], to = group[j];
+      for (let k = 0; k < group.length; k++) if (group[k] === from) group[k] = to;
+    }
+  });
+  const area = (o) => (o.max[0] - o.min[0]) * (o.max[1] - o.min[1]);
+  const best = new Map();
+  group.forEach((g, i) => { if (!best.has(g) || area(obstacles[i]) > area(obstacles[best.get(g)])) best.set(g, i); });
+  return [...best.values()].sort((a, b) => a - b).map((i) => obstacles[i]);
 }
 
 // the signed area (m²) of a polygon's projection onto the plan, [[x, y, z], ...]
