@@ -217,3 +217,15 @@ def test_a_solid_of_several_boxes_is_labelled_once_and_a_zone_kept_in_the_plan(p
         "document.querySelector('#plan-clip polygon').getAttribute('points').split(' ').length"
     )
     assert corners == 6  # the L's outline
+    # three anchors on one vertical line of the south wall: one spot from above, whose top
+    # circle carries the three numbers; three spots from the south
+    page.evaluate(
+        """() => { state.anchors = [[1, 0.03, 1], [5, 0.03, 0.5], [5, 0.03, 1.5], [5, 0.03, 2.5],
+                                    [7, 3.97, 2]];
+                   drawPlan(); drawElevation(); }"""
+    )
+    numbers = page.locator("#plan .anchor-number").all_text_contents()
+    assert numbers == ["1", "2,3,4", "5"]
+    assert page.locator("#plan .anchor").count() == 5  # every circle drawn, each draggable
+    sides = page.locator("#elevation .anchor-number").all_text_contents()
+    assert sides == ["1", "2", "3", "4", "5"]

@@ -44,6 +44,9 @@ async function act(method, path, body) {
 }
 
 // -- drawing helpers ---------------------------------------------------------------------
+// (m) anchors this close in a view share one label (the figures' STACKED)
+const STACKED = 0.05;
+
 function el(name, attrs, parent) {
   const e = document.createElementNS(SVG, name);
   for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
@@ -236,11 +239,17 @@ function drawElevation() {
 
 function drawAnchors(svg, f, axes, view) {
   const [i, j] = axes;
+  // anchors on one spot of this view (three on one vertical line of a wall, from above):
+  // the one drawn last, on top, carries the numbers of all ("2,3,4"), as in the figures
+  const spot = (a, b) => Math.hypot(a[i] - b[i], a[j] - b[j]) <= STACKED;
   state.anchors.forEach((a, index) => {
     const g = el("g", { class: "anchor", "data-index": index, "data-view": view }, svg);
     el("circle", { cx: f.px(a[i]), cy: f.py(a[j]), r: 9, fill: "#fff", stroke: "#b30000", "stroke-width": 3 }, g);
+    const above = state.anchors.some((b, k) => k > index && spot(a, b));
+    const stack = state.anchors.map((b, k) => k).filter((k) => spot(a, state.anchors[k]));
     // numbered from 1, as the report's figures and the mounting sheet (A1, A2, ...) number them
-    label(g, f.px(a[i]), f.py(a[j]) + 4, String(index + 1), { "font-weight": "bold", class: "anchor-number" });
+    if (!above) label(g, f.px(a[i]), f.py(a[j]) + 4, stack.map((k) => k + 1).join(","),
+      { "font-weight": "bold", class: "anchor-number", ...(stack.length > 1 ? { stroke: "#fff", "stroke-width": 3, "paint-order": "stroke" } : {}) });
     g.addEventListener("pointerdown", (ev) => startDrag(ev, svg, f, axes, index, view));
   });
 }
