@@ -161,6 +161,10 @@ def test_a_room_that_does_not_parse_gives_the_command_lines_message(lab, tmp_pat
         },
     )
     assert r.status_code == 200 and r.json()["room_file"] == "floorplan.dxf"
+    # its outline starts at (12, 3) m in the drawing: the page says the plan was moved
+    np.testing.assert_allclose(r.json()["room_shift"], [-12.0, -3.0])
+    r = client.post("/api/room", json={"file": "1/warehouse-aisles.toml"})
+    assert r.json()["room_shift"] is None
 
 
 def test_the_page_reads_and_writes_only_in_its_folders(lab):

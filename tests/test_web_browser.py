@@ -193,6 +193,18 @@ def test_a_slanted_wall_is_drawn_and_a_hanging_duct_labelled_with_its_heights(pa
     assert page.locator("#plan .obstacle").count() == 1
 
 
+def test_a_dxf_plan_moved_to_the_origin_says_so(page):
+    # the example floor plan's outline starts at (12, 3) m in the drawing (in millimetres)
+    dxf = Path(__file__).resolve().parent.parent / "examples" / "floorplan.dxf"
+    page.fill("#room-height", "3")
+    page.fill("#obstacle-height", "3")
+    page.select_option("#dxf-unit", "mm")
+    page.set_input_files("#room-upload", str(dxf))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('floorplan')")
+    name = page.locator("#room-name").inner_text()
+    assert "moved by (-12.000, -3.000) m to start at 0" in name
+
+
 def test_a_solid_of_several_boxes_is_labelled_once_and_a_zone_kept_in_the_plan(page, tmp_path):
     # an L whose zone box covers the missing corner; a pillar of three boxes meeting face to
     # face and a 0.45 m bench

@@ -24,6 +24,7 @@ import numpy as np
 from placement.cli.common import describe_system, json_text, load_room, system_choice
 from placement.surfaces import naive_layout
 from placement.web import jobs, scene
+from simulation.dxf import outline_origin
 from simulation.output import write_file
 
 #: suffixes of the room files the page may open or upload
@@ -136,8 +137,13 @@ class Workspace:
             ]
             if opts["obstacle_height"] is not None:
                 argv += ["--obstacle-height", repr(opts["obstacle_height"])]
+        shift = None  # where a DXF's outline does not start at its origin, the move
+        if path is not None and str(path).lower().endswith(".dxf"):
+            o = outline_origin(path, layer=opts["dxf_layer"], unit=opts["dxf_unit"])
+            shift = None if not np.any(np.abs(o) > 1e-9) else (-o).tolist()
         with self.lock:
             self.room, self.room_path, self.room_argv = room, path, argv
+            self.room_shift = shift
             self.system, self.system_name = chosen, system
             self.anchors = naive_layout(room, FIRST_ANCHORS)
             self.field = None
@@ -200,6 +206,8 @@ class Workspace:
         return {
             "room": scene.drawing(room),
             "room_file": None if self.room_path is None else Path(self.room_path).name,
+            # (dx, dy) m: a DXF plan moved to the room's origin (simulation.dxf)
+            "room_shift": self.room_shift,
             "room_id": self._file_id(self.room_path),
             "system": {
                 "name": system.name,

@@ -384,7 +384,9 @@ function drawPlanJob(p) {
 
 function render(data) {
   state = data;
-  document.getElementById("room-name").textContent = `— ${data.room.name}${data.room_file ? ` (${data.room_file})` : ""}`;
+  // a DXF plan moved to the room's origin: the page's coordinates are the drawing's minus it
+  const shift = data.room_shift ? `, moved by (${data.room_shift.map((v) => v.toFixed(3)).join(", ")}) m to start at 0` : "";
+  document.getElementById("room-name").textContent = `— ${data.room.name}${data.room_file ? ` (${data.room_file}${shift})` : ""}`;
   document.getElementById("system-line").textContent = data.system.describe;
   const sel = document.getElementById("room-file");
   // each file by its name (its folder's index is the value), the room open selected
