@@ -8,9 +8,10 @@ to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's fir
 from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and shifted so that the
 outline's lowest x and y are 0, the room's origin (a warning on the ``simulation.dxf``
 logger gives the shift where there is one: positions in the room, a layout's anchors
-among them, are the drawing's minus that shift). An axis-aligned rectangular outline
-gives the shoebox of its size, any other outline a polygonal room
-(:meth:`Room.from_corners`).
+among them, are the drawing's minus that shift). An outline with arc segments (bulges: a
+rounded wall) is followed by straight walls within :data:`ARC_TOLERANCE` of its arcs, with
+a warning. An axis-aligned rectangular outline gives the shoebox of its size, any other
+outline a polygonal room (:meth:`Room.from_corners`).
 
 **Writing** (:func:`write_plan`): the room's outline, obstacles, keep-outs and tag zones as
 closed polylines on their own layers (``room``, ``obstacles``, ``keepouts``, ``zones``; a
@@ -57,22 +58,38 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
-def _polylines(doc, layer: str) -> list[tuple[np.ndarray, bool]]:
-    """The (vertices (n, 2), closed) of every polyline on ``layer`` (case-insensitive)."""
+def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list[tuple[np.ndarray, bool, bool]]:
+    """The (vertices (n, 2), closed, has arcs) of every polyline on ``layer``
+    (case-insensitive). A polyline with arc segments (bulges: a rounded wall, an apse) is
+    followed by straight segments whose chords stay within ``arc_tolerance`` (drawing
+    units) of its arcs (ezdxf's path flattening); the others keep their vertices."""
+    from ezdxf import path as ezpath
+
     out = []
     for e in doc.modelspace().query("LWPOLYLINE POLYLINE"):
         if e.dxf.layer.lower() != layer.lower():
             continue
         if e.dxftype() == "LWPOLYLINE":
-            pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
+            arcs = bool(e.has_arc)
             closed = bool(e.closed)
         else:
-            pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
+            arcs = any(v.dxf.bulge for v in e.vertices)
             closed = bool(e.is_closed)
+        if arcs:
+            pts = np.array([(v.x, v.y) for v in ezpath.make_path(e).flattening(arc_tolerance)])
+        elif e.dxftype() == "LWPOLYLINE":
+            pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
+        else:
+            pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
             pts, closed = pts[:-1], True
-        out.append((pts, closed))
+        out.append((pts, closed, arcs))
     return out
+
+
+#: (m) the largest distance between an arc of a drawing's outline and the straight walls
+#: that follow it
+ARC_TOLERANCE = 0.05
 
 
 def read_floor_plan(
@@ -92,7 +109,7 @@ def _read(path, layer, unit, obstacle_layer):
     checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
     scale = UNITS[unit]
-    outlines = _polylines(doc, layer)
+    outlines = _polylines(doc, layer, ARC_TOLERANCE / scale)
     layers = sorted({e.dxf.layer for e in doc.modelspace()})
     if not outlines:
         raise ValueError(
@@ -102,16 +119,22 @@ def _read(path, layer, unit, obstacle_layer):
     if len(outlines) > 1:
         raise ValueError(f"layer: {len(outlines)} polylines on layer {layer!r} in {path}; "
                          "expected one closed outline")  # fmt: skip
-    corners, closed = outlines[0]
+    corners, closed, arcs = outlines[0]
     if not closed:
         raise ValueError(
             f"layer: the outline on layer {layer!r} in {path} is an open polyline; close it "
             "(the room is the polygon it encloses)"
         )
     corners = corners * scale
+    if arcs:
+        logger.warning(
+            "%s: the outline on layer %r has arc segments: the room follows them with "
+            "straight walls within %g m of the arcs (%d corners in all; every wall adds image "
+            "sources to simulate)", path, layer, ARC_TOLERANCE, len(corners),
+        )  # fmt: skip
     origin = corners.min(axis=0)
     footprints = []
-    for k, (pts, closed) in enumerate(_polylines(doc, obstacle_layer)):
+    for k, (pts, closed, _) in enumerate(_polylines(doc, obstacle_layer, ARC_TOLERANCE / scale)):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         on_edges = np.all(
@@ -144,7 +167,7 @@ def outline_origin(path, *, layer: str = "room", unit: str = "m") -> np.ndarray:
     """(2,) m: the point of the drawing ``path`` that becomes the room's origin (the lowest
     x and y of its outline on ``layer``; module docstring)."""
     checks.choice("unit", unit, list(UNITS))
-    outlines = _polylines(_doc(path), layer)
+    outlines = _polylines(_doc(path), layer, ARC_TOLERANCE / UNITS[unit])
     if not outlines:
         raise ValueError(f"layer: no polyline on layer {layer!r} in {path}")
     return outlines[0][0].min(axis=0) * UNITS[unit]

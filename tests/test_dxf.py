@@ -59,6 +59,35 @@ def test_a_drawing_away_from_the_origin_says_how_far_it_moved(tmp_path, caplog):
     assert not caplog.records
 
 
+def test_an_outline_with_an_arc_is_followed_within_five_centimetres(tmp_path, caplog):
+    """A 10 × 5 m room whose east wall is a half circle (a bulge of 1 on the east edge, in
+    millimetres): straight walls whose corners lie on the arc and whose chords stay within
+    5 cm of it, with a warning; the same outline without the bulge keeps its 4 corners."""
+    path = tmp_path / "apse.dxf"
+    doc = ezdxf.new("R2010")
+    doc.modelspace().add_lwpolyline(
+        [(0, 0, 0), (10000, 0, 1), (10000, 5000, 0), (0, 5000, 0)], format="xyb", close=True,
+        dxfattribs={"layer": "room"},
+    )  # fmt: skip
+    doc.saveas(path)
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room = room_from_dxf(path, 3.0, unit="mm")
+    assert "arc segments" in caplog.text
+    c = room.floor_corners
+    apse = c[c[:, 0] > 10.0 + 1e-9]  # the corners beyond the straight walls' end
+    assert len(apse) >= 8
+    # on the arc to a millimetre (ezdxf follows an arc by Bézier curves)
+    np.testing.assert_allclose(np.linalg.norm(apse - [10.0, 2.5], axis=1), 2.5, atol=1e-3)
+    assert c[:, 0].max() == pytest.approx(12.5, abs=1e-3)  # the apse reaches 2.5 m out
+    ring = np.vstack([c, c[:1]])
+    mid = 0.5 * (ring[1:] + ring[:-1])
+    on_arc = mid[:, 0] > 10.0 + 1e-9
+    sag = 2.5 - np.linalg.norm(mid[on_arc] - [10.0, 2.5], axis=1)
+    assert 0 < sag.max() <= 0.05  # each chord within 5 cm of the arc
+    straight = _drawing(tmp_path / "box.dxf", [("room", [(0, 0), (10, 0), (10, 5), (0, 5)], True)])
+    assert room_from_dxf(straight, 3.0).is_shoebox
+
+
 def test_a_polygon_outline_and_obstacles(tmp_path):
     """An L in centimetres with two rectangles on the obstacle layer: the polygonal room of
     those corners with two boxes of the given height."""
