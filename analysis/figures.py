@@ -267,21 +267,13 @@ def _draw_room2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
 def _labelled(obstacles) -> list:
     """The obstacles a plan view writes heights on: of the boxes that meet side by side
     with the same bottom and top (a pillar, a counter described as several boxes), only
-    the largest footprint, so that one solid gets one label."""
+    the largest footprint (the first of equals), so that one solid gets one label."""
     obstacles = list(obstacles)
-    group = list(range(len(obstacles)))
-    for i, a in enumerate(obstacles):
-        for j in range(i):
-            b = obstacles[j]
-            if _same_solid(a, b):
-                old, new = group[i], group[j]
-                group = [new if g == old else g for g in group]
+    n = len(obstacles)
+    same = np.array([[_same_solid(a, b) for b in obstacles] for a in obstacles], bool).reshape(n, n)
     area = [(ob.hi[0] - ob.lo[0]) * (ob.hi[1] - ob.lo[1]) for ob in obstacles]
-    best = {}
-    for i, g in enumerate(group):  # the first of equal areas: stable
-        if g not in best or area[i] > area[best[g]]:
-            best[g] = i
-    return [obstacles[i] for i in sorted(best.values())]
+    keep = [max(g, key=lambda i: (area[i], -i)) for g in _groups(same)]
+    return [obstacles[i] for i in sorted(keep)]
 
 
 def _same_solid(a, b, tol: float = 1e-9) -> bool:
@@ -605,11 +597,16 @@ STACKED = 0.05
 
 def _stacks(points) -> list[list[int]]:
     """The groups of the projected anchors points (M, 2) m that lie within
-    :data:`STACKED` of each other (linked in chains), each in row order, ordered by its
-    first row."""
-    near = np.linalg.norm(points[:, None] - points[None], axis=-1) <= STACKED
-    group = np.arange(len(points))
-    for _ in range(len(points)):  # a chain of M is joined within M passes
+    :data:`STACKED` of each other (linked in chains) (:func:`_groups`)."""
+    return _groups(np.linalg.norm(points[:, None] - points[None], axis=-1) <= STACKED)
+
+
+def _groups(near) -> list[list[int]]:
+    """The connected groups of the symmetric relation near (n, n) bool (i and j in one
+    group when a chain of near pairs links them), each in index order, ordered by its
+    first index."""
+    group = np.arange(len(near))
+    for _ in range(len(near)):  # a chain of n is joined within n passes
         group = np.min(np.where(near, group[None], group[:, None]), axis=1)
     return [np.flatnonzero(group == g).tolist() for g in np.unique(group)]
 
