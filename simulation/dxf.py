@@ -1,8 +1,9 @@
 """Floor plans in DXF, the CAD format floor plans come in (ezdxf).
 
 **Reading** (:func:`read_floor_plan`, :func:`room_from_dxf`): the room's outline is the closed
-polyline (LWPOLYLINE or POLYLINE) on a named layer (default ``room``), the obstacles the
-closed axis-aligned rectangles on another (default ``obstacles``), standing from the floor
+polyline (LWPOLYLINE or POLYLINE), or the LINEs and ARCs joined end to end into one closed
+loop, on a named layer (default ``room``), the obstacles the closed axis-aligned rectangles
+(polylines or four lines) on another (default ``obstacles``), standing from the floor
 to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
 (as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Coordinates are converted
 from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and shifted so that the
@@ -31,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from simulation import checks
+from simulation.floorplan import straight_corners
 from simulation.output import write_with
 from simulation.room import SIZE_RANGE, Room
 
@@ -58,11 +60,13 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
-def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list[tuple[np.ndarray, bool, bool]]:
+def _polylines(doc, layer: str, arc_tolerance: float = 0.05, path="") -> list:
     """The (vertices (n, 2), closed, has arcs) of every polyline on ``layer``
-    (case-insensitive). A polyline with arc segments (bulges: a rounded wall, an apse) is
-    followed by straight segments whose chords stay within ``arc_tolerance`` (drawing
-    units) of its arcs (ezdxf's path flattening); the others keep their vertices."""
+    (case-insensitive), then the closed loops of its lines (:func:`_line_loops`; ``path``
+    names the file in its errors). A polyline with arc segments (bulges: a rounded wall,
+    an apse) is followed by straight segments whose chords stay within ``arc_tolerance``
+    (drawing units) of its arcs (ezdxf's path flattening); the others keep their
+    vertices."""
     from ezdxf import path as ezpath
 
     out = []
@@ -83,8 +87,63 @@ def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list[tuple[np.nd
             pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
             pts, closed = pts[:-1], True
-        out.append((pts, closed, arcs))
-    return out
+        out.append((_merge_straight(pts, arc_tolerance) if closed else pts, closed, arcs))
+    return out + _line_loops(doc, layer, arc_tolerance, path)
+
+
+def _merge_straight(pts: np.ndarray, arc_tolerance: float) -> np.ndarray:
+    """The closed outline pts (n, 2) without the vertices that lie within :data:`GAP` of
+    the segment between their neighbours (a wall drawn in two pieces, at a door), one at a
+    time (``arc_tolerance`` gives the drawing's unit)."""
+    tol = GAP * arc_tolerance / ARC_TOLERANCE
+    while len(pts) > 3:
+        k = straight_corners(pts, tol)
+        if not k.size:
+            break
+        pts = np.delete(pts, k[0], axis=0)
+    return pts
+
+
+#: (m) LINE and ARC ends closer than this join (a drawing's rounding)
+GAP = 1e-3
+
+
+def _line_loops(doc, layer: str, arc_tolerance: float, path="") -> list:
+    """The closed loops that the LINE and ARC entities on ``layer`` form end to end (a
+    drawing whose walls are single lines), as :func:`_polylines` gives polylines: their
+    arcs followed within ``arc_tolerance`` (drawing units). ValueError naming the layer
+    when some of them do not close (ezdxf's edgeminer finds the loops)."""
+    from ezdxf import edgeminer, edgesmith
+
+    entities = [e for e in doc.modelspace().query("LINE ARC")
+                if e.dxf.layer.lower() == layer.lower()]  # fmt: skip
+    if not entities:
+        return []
+    gap = GAP * arc_tolerance / ARC_TOLERANCE  # in drawing units, as arc_tolerance
+    edges = list(edgesmith.edges_from_entities_2d(entities, gap_tol=gap))
+    loops, rest = [], edges
+    while rest:
+        try:
+            loop = edgeminer.find_loop(edgeminer.Deposit(rest, gap_tol=gap), timeout=10.0)
+        except TimeoutError:
+            loop = ()
+        if not loop:
+            break
+        ids = {e.id for e in loop}
+        rest = [e for e in rest if e.id not in ids]
+        path = edgesmith.path2d_from_chain(loop)
+        pts = np.array([(v.x, v.y) for v in path.flattening(arc_tolerance)])
+        if len(pts) > 1 and np.allclose(pts[0], pts[-1]):
+            pts = pts[:-1]
+        arcs = any(e.payload.dxftype() == "ARC" for e in loop)
+        loops.append((_merge_straight(pts, arc_tolerance), True, arcs))
+    if rest:
+        raise ValueError(
+            f"layer: {len(rest)} of the {len(edges)} lines and arcs on layer {layer!r} in "
+            f"{path} do not join end to end into closed outlines (a gap over {GAP * 1000:g} mm "
+            "or a stray line); close them or draw each outline as one closed polyline"
+        )
+    return loops
 
 
 #: (m) the largest distance between an arc of a drawing's outline and the straight walls
@@ -109,15 +168,15 @@ def _read(path, layer, unit, obstacle_layer):
     checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
     scale = UNITS[unit]
-    outlines = _polylines(doc, layer, ARC_TOLERANCE / scale)
+    outlines = _polylines(doc, layer, ARC_TOLERANCE / scale, path)
     layers = sorted({e.dxf.layer for e in doc.modelspace()})
     if not outlines:
         raise ValueError(
-            f"layer: no polyline on layer {layer!r} in {path} (its layers: {layers}); the "
-            "room's outline is a closed polyline on that layer"
+            f"layer: no polyline or lines on layer {layer!r} in {path} (its layers: {layers}); "
+            "the room's outline is a closed polyline (or lines joined end to end) on that layer"
         )
     if len(outlines) > 1:
-        raise ValueError(f"layer: {len(outlines)} polylines on layer {layer!r} in {path}; "
+        raise ValueError(f"layer: {len(outlines)} outlines on layer {layer!r} in {path}; "
                          "expected one closed outline")  # fmt: skip
     corners, closed, arcs = outlines[0]
     if not closed:
@@ -134,7 +193,8 @@ def _read(path, layer, unit, obstacle_layer):
         )  # fmt: skip
     origin = corners.min(axis=0)
     footprints = []
-    for k, (pts, closed, _) in enumerate(_polylines(doc, obstacle_layer, ARC_TOLERANCE / scale)):
+    blocks = _polylines(doc, obstacle_layer, ARC_TOLERANCE / scale, path)
+    for k, (pts, closed, _) in enumerate(blocks):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         on_edges = np.all(

@@ -81,6 +81,14 @@ def normalize_corners(corners, wall_names=()) -> tuple[np.ndarray, tuple[str, ..
             f"corners: the polygon has zero area (collinear corners {c.tolist()}); allowed: "
             "a simple polygon enclosing the floor"
         )
+    split = straight_corners(c, CORNER_TOL)
+    if split.size:
+        k = int(split[0])
+        raise ValueError(
+            f"corners: corner {k} {c[k].tolist()} lies on the straight line between its "
+            "neighbours (one wall drawn as two); allowed: corners where the walls turn "
+            "(remove it)"
+        )
     if not poly.exterior.is_simple or not poly.is_valid or poly.area <= 1e-9:
         raise ValueError(
             "corners: the polygon intersects itself; allowed: a simple polygon, corners in "
@@ -92,6 +100,17 @@ def normalize_corners(corners, wall_names=()) -> tuple[np.ndarray, tuple[str, ..
         n = len(c)
         names = tuple(names[(n - 2 - j) % n] for j in range(n))
     return c, names
+
+
+def straight_corners(c: np.ndarray, tol: float) -> np.ndarray:
+    """The indices of the corners of the closed polygon c (n, 2) m that lie within ``tol``
+    m of the segment between their two neighbours: not a turn of the walls."""
+    prev, nxt = np.roll(c, 1, axis=0), np.roll(c, -1, axis=0)
+    e, r = nxt - prev, c - prev
+    length2 = np.einsum("ij,ij->i", e, e)
+    off = np.abs(e[:, 0] * r[:, 1] - e[:, 1] * r[:, 0]) / np.sqrt(np.maximum(length2, 1e-300))
+    along = np.einsum("ij,ij->i", r, e) / np.maximum(length2, 1e-300)
+    return np.flatnonzero((off < tol) & (along > 0) & (along < 1))
 
 
 def _wall_names(given, n: int) -> tuple[str, ...]:

@@ -105,6 +105,51 @@ def test_a_polygon_outline_and_obstacles(tmp_path):
     assert np.allclose(boxes[1], [(5, 1, 0), (6, 2, 2)])
 
 
+def _lines(path, loops, unit_scale=1.0, shuffle=False):
+    """A DXF whose outlines [(layer, points)] are drawn as separate LINEs (in reverse order
+    and reversed direction with ``shuffle``: a drawing's lines come in any order)."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    for layer, pts in loops:
+        segs = [(a, b) for a, b in zip(pts, [*pts[1:], pts[0]], strict=True)]
+        for a, b in reversed(segs) if shuffle else segs:
+            a, b = (b, a) if shuffle else (a, b)
+            msp.add_line([v * unit_scale for v in a], [v * unit_scale for v in b],
+                         dxfattribs={"layer": layer})  # fmt: skip
+    doc.saveas(path)
+    return path
+
+
+def test_an_outline_and_obstacles_drawn_as_lines_read_as_polylines(tmp_path):
+    """The L and a rectangle on the obstacle layer drawn as single lines (in millimetres, in
+    any order and direction): the same room as the polyline drawing; a gap in the outline
+    is refused naming the layer."""
+    box = [(1, 1), (1.5, 1), (1.5, 1.5), (1, 1.5)]
+    lines = _lines(tmp_path / "lines.dxf", [("room", L_CORNERS), ("obstacles", box)],
+                   unit_scale=1000.0, shuffle=True)  # fmt: skip
+    poly = _drawing(tmp_path / "poly.dxf", [("room", L_CORNERS, True), ("obstacles", box, True)],
+                    unit_scale=1000.0)  # fmt: skip
+    a = room_from_dxf(lines, 3.0, unit="mm", obstacle_height=2.0)
+    b = room_from_dxf(poly, 3.0, unit="mm", obstacle_height=2.0)
+    assert {tuple(c) for c in np.round(a.floor_corners, 9)} == {
+        tuple(c) for c in np.round(b.floor_corners, 9)}  # fmt: skip
+    assert [(tuple(o.lo), tuple(o.hi)) for o in a.obstacles] == [
+        (tuple(o.lo), tuple(o.hi)) for o in b.obstacles]  # fmt: skip
+    # the south wall drawn in two pieces (at a door), as lines and as a polyline: one wall
+    split = [(0, 0), (2.5, 0), *L_CORNERS[1:]]
+    for path in (_lines(tmp_path / "split.dxf", [("room", split)]),
+                 _drawing(tmp_path / "split2.dxf", [("room", split, True)])):  # fmt: skip
+        corners = room_from_dxf(path, 3.0).floor_corners
+        assert {tuple(c) for c in np.round(corners, 9)} == {tuple(map(float, c)) for c in L_CORNERS}
+    gap = [*L_CORNERS[:-1], (0.0, 5.9)]  # the last wall stops 10 cm short
+    doc = ezdxf.new("R2010")
+    for u, v in zip(gap, gap[1:], strict=False):
+        doc.modelspace().add_line(u, v, dxfattribs={"layer": "room"})
+    doc.saveas(tmp_path / "gap.dxf")
+    with pytest.raises(ValueError, match="layer: 5 of the 5 lines and arcs on layer 'room'"):
+        room_from_dxf(tmp_path / "gap.dxf", 3.0)
+
+
 @pytest.mark.parametrize(
     ("polylines", "kw", "name"),
     [

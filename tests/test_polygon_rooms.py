@@ -62,6 +62,11 @@ def test_corners_are_normalized_to_counter_clockwise_with_their_wall_names():
         (lambda: Room.from_corners([[0, 0], [1, 0]], 3.0), "corners"),
         (lambda: Room.from_corners([[0, 0], [4, 0], [4, 0], [0, 3]], 3.0), "repeat"),
         (lambda: Room.from_corners([[0, 0], [2, 0], [4, 0]], 3.0), "zero area"),
+        # one wall drawn as two: named, not "insetting drops a wall"
+        (
+            lambda: Room.from_corners([[0, 0], [2, 0], [4, 0], [4, 3], [0, 3]], 3.0),
+            r"corner 1 \[2.0, 0.0\] lies on the straight line",
+        ),
         (lambda: Room.from_corners([[0, 0], [4, 4], [4, 0], [0, 4]], 3.0), "intersects"),
         (lambda: Room.from_corners([[-1, 0], [4, 0], [4, 3]], 3.0), "negative"),
         (lambda: Room.from_corners(L_CORNERS, 0.0), "height"),
