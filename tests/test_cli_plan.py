@@ -65,6 +65,28 @@ def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
         _check_args(bad, room, None)
 
 
+def test_a_robust_plan_short_of_the_coverage_it_could_reach_prints_the_coverage_note():
+    # the committed recommended L-lab: 84.7 % of the nodes see 5 anchors where the coverage
+    # selection covers 97.6 %; the warehouse's selection cannot reach 95 %, techtile's nodes
+    # see every anchor, the paper's L-lab does not verify fixes: no note; nor with a target
+    import dataclasses
+    from pathlib import Path
+
+    from placement.cli.plan import coverage_note
+    from placement.plan_result import PlacementResult
+
+    examples = Path(__file__).resolve().parent.parent / "docs" / "examples"
+    lab = PlacementResult.read(examples / "l-shaped-lab-recommended")
+    note = coverage_note(lab)
+    assert note.startswith("note: 84.7 % of the nodes see 5 anchors")
+    assert "covers 97.6 % with 8" in note and "--min-coverage 0.95" in note
+    for name in ("warehouse-aisles-recommended", "techtile-recommended", "l-shaped-lab"):
+        assert coverage_note(PlacementResult.read(examples / name)) is None
+    search = dataclasses.replace(lab.settings.search, min_coverage=0.9)
+    kept = dataclasses.replace(lab, settings=dataclasses.replace(lab.settings, search=search))
+    assert coverage_note(kept) is None
+
+
 def test_least_squares_in_a_room_that_hides_anchors_prints_the_echo_note():
     # the committed plans read back: the L-lab with the paper's system (field median 1.3 m)
     # gets the note; the same room with the recommended system, and the paper's own room,

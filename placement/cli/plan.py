@@ -347,10 +347,36 @@ def _print_result(res, args) -> None:
     for a in res.anchors:
         print(f"  {a[0]:7.3f} {a[1]:7.3f} {a[2]:7.3f}")
     _print_validation(res.validation, res.system.positioning.method == "robust")
-    note = echo_note(res.room, res.system, res.validation)
-    if note:
-        print(note)
+    for note in (echo_note(res.room, res.system, res.validation), coverage_note(res)):
+        if note:
+            print(note)
     _print_phases(res)
+
+
+def coverage_note(res) -> str | None:
+    """A note where a plan for robust positioning left the zone short of the anchors a fix
+    needs to be verified (k in line of sight and reach) while the coverage selection shows
+    that M anchors cover it: the search, free of a coverage target, traded coverage for the
+    error at the nodes. None with a coverage target, without robust positioning, or where
+    the plan covers :data:`COVERAGE_NOTE` of the nodes or the selection cannot."""
+    v, cover = res.validation, res.settings.search_result.get("coverage")
+    if (res.system.positioning.method != "robust" or res.settings.search.min_coverage
+            or not cover or v is None or not v.covered == v.covered):  # fmt: skip
+        return None
+    if cover["covered"] < COVERAGE_NOTE or v.covered >= COVERAGE_NOTE:
+        return None
+    field = "" if v.field is None else f" (verified in the field: {100 * v.field.verified:.1f} %)"
+    return (f"note: {100 * v.covered:.1f} % of the nodes see {v.coverage_k} anchors in line of "
+            f"sight and reach, where the coverage selection covers {100 * cover['covered']:.1f} "
+            f"% with {res.settings.M}: a fix is verified only where {v.coverage_k} consistent "
+            f"anchors are heard{field}. --min-coverage {COVERAGE_NOTE:g} keeps every layout to "
+            f"that share (it can cost field P95 elsewhere: BENCHMARKS.md, \"A coverage target "
+            "the plan keeps to\").")  # fmt: skip
+
+
+#: the share of the nodes seeing k anchors below which a plan free of a coverage target,
+#: where the coverage selection reaches it, prints :func:`coverage_note`
+COVERAGE_NOTE = 0.95
 
 
 def echo_note(room, system, validation) -> str | None:
