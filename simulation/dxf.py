@@ -60,13 +60,11 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
-def _polylines(doc, layer: str, arc_tolerance: float = 0.05, path="") -> list:
+def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list:
     """The (vertices (n, 2), closed, has arcs) of every polyline on ``layer``
-    (case-insensitive), then the closed loops of its lines (:func:`_line_loops`; ``path``
-    names the file in its errors). A polyline with arc segments (bulges: a rounded wall,
-    an apse) is followed by straight segments whose chords stay within ``arc_tolerance``
-    (drawing units) of its arcs (ezdxf's path flattening); the others keep their
-    vertices."""
+    (case-insensitive). A polyline with arc segments (bulges: a rounded wall, an apse) is
+    followed by straight segments whose chords stay within ``arc_tolerance`` (drawing
+    units) of its arcs (ezdxf's path flattening); the others keep their vertices."""
     from ezdxf import path as ezpath
 
     out = []
@@ -88,7 +86,16 @@ def _polylines(doc, layer: str, arc_tolerance: float = 0.05, path="") -> list:
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
             pts, closed = pts[:-1], True
         out.append((_merge_straight(pts, arc_tolerance) if closed else pts, closed, arcs))
-    return out + _line_loops(doc, layer, arc_tolerance, path)
+    return out
+
+
+def _outlines(doc, layer: str, arc_tolerance: float, path) -> list:
+    """The room's outlines on ``layer``: its polylines, or where it has none, the closed
+    loops of its lines and arcs (:func:`_line_loops`, every one of them in a loop; lines
+    beside a polyline, a door's swing, are not the outline)."""
+    return _polylines(doc, layer, arc_tolerance) or _line_loops(
+        doc, layer, arc_tolerance, path, strict=True
+    )
 
 
 def _merge_straight(pts: np.ndarray, arc_tolerance: float) -> np.ndarray:
@@ -108,11 +115,12 @@ def _merge_straight(pts: np.ndarray, arc_tolerance: float) -> np.ndarray:
 GAP = 1e-3
 
 
-def _line_loops(doc, layer: str, arc_tolerance: float, path="") -> list:
+def _line_loops(doc, layer: str, arc_tolerance: float, path, strict: bool) -> list:
     """The closed loops that the LINE and ARC entities on ``layer`` form end to end (a
     drawing whose walls are single lines), as :func:`_polylines` gives polylines: their
-    arcs followed within ``arc_tolerance`` (drawing units). ValueError naming the layer
-    when some of them do not close (ezdxf's edgeminer finds the loops)."""
+    arcs followed within ``arc_tolerance`` (drawing units; ezdxf's edgeminer finds the
+    loops). Lines and arcs in no loop: a ValueError naming the layer and the file
+    ``path`` (``strict``), else a warning, and they are left out."""
     from ezdxf import edgeminer, edgesmith
 
     entities = [e for e in doc.modelspace().query("LINE ARC")
@@ -131,18 +139,21 @@ def _line_loops(doc, layer: str, arc_tolerance: float, path="") -> list:
             break
         ids = {e.id for e in loop}
         rest = [e for e in rest if e.id not in ids]
-        path = edgesmith.path2d_from_chain(loop)
-        pts = np.array([(v.x, v.y) for v in path.flattening(arc_tolerance)])
+        chain = edgesmith.path2d_from_chain(loop)
+        pts = np.array([(v.x, v.y) for v in chain.flattening(arc_tolerance)])
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):
             pts = pts[:-1]
         arcs = any(e.payload.dxftype() == "ARC" for e in loop)
         loops.append((_merge_straight(pts, arc_tolerance), True, arcs))
-    if rest:
+    if rest and strict:
         raise ValueError(
             f"layer: {len(rest)} of the {len(edges)} lines and arcs on layer {layer!r} in "
             f"{path} do not join end to end into closed outlines (a gap over {GAP * 1000:g} mm "
             "or a stray line); close them or draw each outline as one closed polyline"
         )
+    if rest:
+        logger.warning("%s: %d of the %d lines and arcs on layer %r close no box and are left "
+                       "out", path, len(rest), len(edges), layer)  # fmt: skip
     return loops
 
 
@@ -168,7 +179,7 @@ def _read(path, layer, unit, obstacle_layer):
     checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
     scale = UNITS[unit]
-    outlines = _polylines(doc, layer, ARC_TOLERANCE / scale, path)
+    outlines = _outlines(doc, layer, ARC_TOLERANCE / scale, path)
     layers = sorted({e.dxf.layer for e in doc.modelspace()})
     if not outlines:
         raise ValueError(
@@ -193,7 +204,9 @@ def _read(path, layer, unit, obstacle_layer):
         )  # fmt: skip
     origin = corners.min(axis=0)
     footprints = []
-    blocks = _polylines(doc, obstacle_layer, ARC_TOLERANCE / scale, path)
+    tol = ARC_TOLERANCE / scale
+    blocks = _polylines(doc, obstacle_layer, tol) + _line_loops(doc, obstacle_layer, tol, path,
+                                                                strict=False)  # fmt: skip
     for k, (pts, closed, _) in enumerate(blocks):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -227,7 +240,7 @@ def outline_origin(path, *, layer: str = "room", unit: str = "m") -> np.ndarray:
     """(2,) m: the point of the drawing ``path`` that becomes the room's origin (the lowest
     x and y of its outline on ``layer``; module docstring)."""
     checks.choice("unit", unit, list(UNITS))
-    outlines = _polylines(_doc(path), layer, ARC_TOLERANCE / UNITS[unit])
+    outlines = _outlines(_doc(path), layer, ARC_TOLERANCE / UNITS[unit], path)
     if not outlines:
         raise ValueError(f"layer: no polyline on layer {layer!r} in {path}")
     return outlines[0][0].min(axis=0) * UNITS[unit]

@@ -146,8 +146,25 @@ def test_an_outline_and_obstacles_drawn_as_lines_read_as_polylines(tmp_path):
     for u, v in zip(gap, gap[1:], strict=False):
         doc.modelspace().add_line(u, v, dxfattribs={"layer": "room"})
     doc.saveas(tmp_path / "gap.dxf")
-    with pytest.raises(ValueError, match="layer: 5 of the 5 lines and arcs on layer 'room'"):
+    with pytest.raises(ValueError, match="layer: 5 of the 5 lines and arcs on layer 'room' in "
+                       f"{tmp_path / 'gap.dxf'} do not join"):  # fmt: skip
         room_from_dxf(tmp_path / "gap.dxf", 3.0)
+
+
+def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
+    """A door's swing drawn as a line on the outline's layer beside the closed polyline, and
+    a stray line on the obstacles' layer beside a rectangle: the polylines are read, the
+    obstacle layer's stray line is left out with a warning."""
+    box = [(1, 1), (2, 1), (2, 2), (1, 2)]
+    path = _drawing(tmp_path / "door.dxf", [("room", L_CORNERS, True), ("obstacles", box, True)])
+    doc = ezdxf.readfile(path)
+    doc.modelspace().add_line((1, 0), (1.8, 0.8), dxfattribs={"layer": "room"})
+    doc.modelspace().add_line((4, 1), (5, 1), dxfattribs={"layer": "obstacles"})
+    doc.saveas(path)
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room = room_from_dxf(path, 3.0, obstacle_height=1.0)
+    assert np.allclose(room.floor_corners, L_CORNERS) and len(room.obstacles) == 1
+    assert "1 of the 1 lines and arcs on layer 'obstacles' close no box" in caplog.text
 
 
 @pytest.mark.parametrize(
