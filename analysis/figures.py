@@ -42,6 +42,7 @@ from analysis.coverage import bound as _bound
 from analysis.coverage import coverage as _coverage
 from analysis.fim import DEFAULT_SIGMA
 from analysis.fim import peb as _peb
+from analysis.stacking import groups, stacks
 from analysis.statistics import ecdf, error_stats
 from simulation import checks
 from simulation.directivity import aim_vectors
@@ -272,7 +273,7 @@ def _labelled(obstacles) -> list:
     n = len(obstacles)
     same = np.array([[_same_solid(a, b) for b in obstacles] for a in obstacles], bool).reshape(n, n)
     area = [(ob.hi[0] - ob.lo[0]) * (ob.hi[1] - ob.lo[1]) for ob in obstacles]
-    keep = [max(g, key=lambda i: (area[i], -i)) for g in _groups(same)]
+    keep = [max(g, key=lambda i: (area[i], -i)) for g in groups(same)]
     return [obstacles[i] for i in sorted(keep)]
 
 
@@ -564,7 +565,7 @@ def coverage_map(
 def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black") -> None:
     """Anchors projected onto the (iu, iv) plane as squares numbered 1…M (row order);
     anchors that the projection puts on one spot (three on one vertical line of a wall,
-    seen from above) share one label, "2,3,4" (:func:`_stacks`)."""
+    seen from above) share one label, "2,3,4" (:func:`analysis.stacking.stacks`)."""
     ax.scatter(
         anchors[:, iu],
         anchors[:, iv],
@@ -577,7 +578,7 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
         gid="anchors",
         clip_on=False,
     )
-    for stack in _stacks(anchors[:, [iu, iv]]):
+    for stack in stacks(anchors[:, [iu, iv]]):
         ax.annotate(
             ",".join(str(j + 1) for j in stack),
             tuple(anchors[stack[0], [iu, iv]]),
@@ -589,26 +590,6 @@ def _numbered_anchors2d(ax, anchors, iu: int, iv: int, color, edge: str = "black
             path_effects=_outline(),
             annotation_clip=False,
         )
-
-
-#: (m) projected anchors closer than this share a label: their squares cover each other
-STACKED = 0.05
-
-
-def _stacks(points) -> list[list[int]]:
-    """The groups of the projected anchors points (M, 2) m that lie within
-    :data:`STACKED` of each other (linked in chains) (:func:`_groups`)."""
-    return _groups(np.linalg.norm(points[:, None] - points[None], axis=-1) <= STACKED)
-
-
-def _groups(near) -> list[list[int]]:
-    """The connected groups of the symmetric relation near (n, n) bool (i and j in one
-    group when a chain of near pairs links them), each in index order, ordered by its
-    first index."""
-    group = np.arange(len(near))
-    for _ in range(len(near)):  # a chain of n is joined within n passes
-        group = np.min(np.where(near, group[None], group[:, None]), axis=1)
-    return [np.flatnonzero(group == g).tolist() for g in np.unique(group)]
 
 
 #: a surface whose normal's component along the view is at most this is seen edge-on

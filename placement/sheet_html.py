@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.stacking import STACKED, stacks
 from placement.mount import Mount, VerticalFrame
 from simulation.room import Room
 
@@ -161,21 +162,7 @@ def elevation_svg(room: Room, frame: VerticalFrame, rows: list[Mount]) -> str:
         f'<rect x="{X(0):.1f}" y="{top:.1f}" width="{L * s:.1f}" '
         f'height="{H * s:.1f}" fill="#fbfbf8" stroke="#1d232a" stroke-width="2"/>',
     ]
-    start, right, normal = (np.asarray(v) for v in (frame.start, frame.right, frame.normal))
-    for lo, hi, name, kind in _boxes(room):
-        if name == frame.name.rsplit(":", 1)[0]:
-            continue  # the obstacle whose face this is
-        foot = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]) - start
-        depth, along = foot @ normal, foot @ right
-        z0, z1 = max(lo[2], frame.bottom), min(hi[2], frame.top)
-        u0, u1 = max(along.min(), 0.0), min(along.max(), L)
-        if depth.min() > _NEAR or depth.max() < -1e-9 or z1 <= z0 or u1 <= u0:
-            continue
-        parts.append(
-            f'<rect x="{X(u0):.1f}" y="{Y(z1):.1f}" width="{(u1 - u0) * s:.1f}" '
-            f'height="{(z1 - z0) * s:.1f}" {_box_style(kind)}/>'
-        )
-        parts.append(_text(X(u0) + 3, Y(z1) + 12, name, 10))
+    parts += _boxes_on_wall(room, frame, X, Y, s)
     parts.append(_text(X(0), bottom + 14, f"◀ {frame.reference}", 10))
     parts.append(_text(X(L), bottom + 14, f"{L:.3f} m", 10, "end"))
     parts.append(
@@ -189,38 +176,65 @@ def elevation_svg(room: Room, frame: VerticalFrame, rows: list[Mount]) -> str:
     )
     ordered = sorted(rows, key=lambda r: r.along)
     for k, r in enumerate(ordered):
-        x, y = X(r.along), Y(r.height)
         # anchors above each other (one along): their heights' dimensions side by side
-        xh = x + 9 + 16 * sum(abs(q.along - r.along) <= STACKED for q in ordered[:k])
-        yd = bottom + 30 + gap * k
-        parts.append(_dim(X(0), yd, x, yd))
-        parts.append(
-            _text(
-                X(0) + 4 if x - X(0) < 140 else (X(0) + x) / 2,
-                yd - 3,
-                f"A{r.id}: {r.along:.3f} m",
-                10,
-                "start" if x - X(0) < 140 else "middle",
-            )
-        )
-        parts.append(
-            f'<line x1="{x:.1f}" y1="{y:.1f}" x2="{x:.1f}" y2="{yd:.1f}" '
-            'stroke="#8a939c" stroke-width="0.6" stroke-dasharray="3 3"/>'
-        )
-        parts.append(_dim(xh, Y(frame.bottom), xh, y))
-        parts.append(
-            _text(
-                xh + 4,
-                (Y(frame.bottom) + y) / 2,
-                f"{r.height:.3f} m",
-                10,
-                extra=f'transform="rotate(-90 {xh + 4:.1f} {(Y(frame.bottom) + y) / 2:.1f})"',
-            )
-        )
-        parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="6" fill="#1f77b4" stroke="#fff"/>')
-        parts.append(_text(x - 8, y - 9, f"A{r.id}", 11, "end", 'font-weight="600"'))
+        beside = sum(abs(q.along - r.along) <= STACKED for q in ordered[:k])
+        parts += _anchor_on_wall(r, X, Y(frame.bottom), Y(r.height), bottom + 30 + gap * k, beside)
     parts.append("</svg>")
     return "".join(parts)
+
+
+def _boxes_on_wall(room: Room, frame: VerticalFrame, X, Y, s: float) -> list[str]:
+    """The obstacles and keep-outs against the surface ``frame`` as drawn on its elevation
+    (``X``, ``Y``: metres along and up to pixels; ``s`` pixels per metre)."""
+    parts = []
+    start, right, normal = (np.asarray(v) for v in (frame.start, frame.right, frame.normal))
+    for lo, hi, name, kind in _boxes(room):
+        if name == frame.name.rsplit(":", 1)[0]:
+            continue  # the obstacle whose face this is
+        foot = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])]) - start
+        depth, along = foot @ normal, foot @ right
+        z0, z1 = max(lo[2], frame.bottom), min(hi[2], frame.top)
+        u0, u1 = max(along.min(), 0.0), min(along.max(), frame.length)
+        if depth.min() > _NEAR or depth.max() < -1e-9 or z1 <= z0 or u1 <= u0:
+            continue
+        parts.append(
+            f'<rect x="{X(u0):.1f}" y="{Y(z1):.1f}" width="{(u1 - u0) * s:.1f}" '
+            f'height="{(z1 - z0) * s:.1f}" {_box_style(kind)}/>'
+        )
+        parts.append(_text(X(u0) + 3, Y(z1) + 12, name, 10))
+    return parts
+
+
+def _anchor_on_wall(r: Mount, X, floor: float, y: float, yd: float, beside: int) -> list[str]:
+    """One anchor on a wall's elevation: its dimension line along the wall at ``yd`` px, its
+    height's from the ``floor`` px (``beside`` anchors below it on the same vertical: this
+    one's dimension drawn that many places to the right), its mark at height ``y`` px."""
+    x = X(r.along)
+    xh = x + 9 + 16 * beside
+    near = x - X(0) < 140
+    mid = (floor + y) / 2
+    return [
+        _dim(X(0), yd, x, yd),
+        _text(
+            X(0) + 4 if near else (X(0) + x) / 2,
+            yd - 3,
+            f"A{r.id}: {r.along:.3f} m",
+            10,
+            "start" if near else "middle",
+        ),  # fmt: skip
+        f'<line x1="{x:.1f}" y1="{y:.1f}" x2="{x:.1f}" y2="{yd:.1f}" '
+        'stroke="#8a939c" stroke-width="0.6" stroke-dasharray="3 3"/>',
+        _dim(xh, floor, xh, y),
+        _text(
+            xh + 4,
+            mid,
+            f"{r.height:.3f} m",
+            10,
+            extra=f'transform="rotate(-90 {xh + 4:.1f} {mid:.1f})"',
+        ),  # fmt: skip
+        f'<circle cx="{x:.1f}" cy="{y:.1f}" r="6" fill="#1f77b4" stroke="#fff"/>',
+        _text(x - 8, y - 9, f"A{r.id}", 11, "end", 'font-weight="600"'),
+    ]
 
 
 def plan_svg(room: Room, rows: list[Mount]) -> str:
@@ -268,42 +282,35 @@ def plan_svg(room: Room, rows: list[Mount]) -> str:
     rx, ry = P(*corners[0])  # the ceiling's reference corner (placement.sheet)
     parts.append(f'<circle cx="{rx:.1f}" cy="{ry:.1f}" r="4" fill="#c0392b"/>')
     parts.append(_text(rx + 6, ry + 14, "reference corner (0, 0)", 10, extra='fill="#c0392b"'))
-    drawn: list = []  # wall anchors labelled so far: those above them share their label
-    for r in rows:
+    ceiling = [r for r in rows if r.kind == "plane" and ":" not in r.surface]
+    on_walls = [r for r in rows if not (r.kind == "plane" and ":" not in r.surface)]
+    for r in ceiling:
         x, y = P(r.position[0], r.position[1])
-        # labels on the side away from the nearer end of the drawing, so none leaves it
-        dx, anchor = (8.0, "start") if x < _W / 2 else (-8.0, "end")
-        if r.kind == "plane" and ":" not in r.surface:
-            parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="6" fill="#1f77b4" stroke="#fff"/>')
-            parts.append(_text(x + dx, y - 4, f"A{r.id}", 11, anchor, 'font-weight="600"'))
-            parts.append(_text(x + dx, y + 7, f"x {r.plan_x:.3f}", 8.5, anchor))
-            parts.append(_text(x + dx, y + 17, f"y {r.plan_y:.3f}", 8.5, anchor))
-        else:
+        dx, anchor = _label_side(x)
+        parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="6" fill="#1f77b4" stroke="#fff"/>')
+        parts.append(_text(x + dx, y - 4, f"A{r.id}", 11, anchor, 'font-weight="600"'))
+        parts.append(_text(x + dx, y + 7, f"x {r.plan_x:.3f}", 8.5, anchor))
+        parts.append(_text(x + dx, y + 17, f"y {r.plan_y:.3f}", 8.5, anchor))
+    # wall anchors one above the other are one spot from above: one label ("A4, A5")
+    for stack in stacks([r.position[:2] for r in on_walls]):
+        for k in stack:
+            x, y = P(on_walls[k].position[0], on_walls[k].position[1])
             parts.append(
                 f'<rect x="{x - 5:.1f}" y="{y - 5:.1f}" width="10" height="10" '
                 'fill="#2ca02c" stroke="#fff"/>'
             )
-            _stack_label(parts, drawn, r, x + dx, y + 4, anchor)
+        x, y = P(on_walls[stack[0]].position[0], on_walls[stack[0]].position[1])
+        dx, anchor = _label_side(x)
+        parts.append(_text(x + dx, y + 4, ", ".join(f"A{on_walls[k].id}" for k in stack), 10,
+                           anchor))  # fmt: skip
     parts.append("</svg>")
     return "".join(parts)
 
 
-#: (m) wall anchors this close along a wall (one above the other) are stacked: the ceiling
-#: plan gives them one label ("A2, A3"), a wall's drawing their heights side by side
-STACKED = 0.05
-
-
-def _stack_label(parts: list, drawn: list, r, x: float, y: float, anchor: str) -> None:
-    """The ceiling plan's label of the wall anchor r at (x, y) px, or r's id added to the
-    label of an anchor drawn within :data:`STACKED` of it (``drawn``: [(position, ids,
-    index into parts, x, y, anchor)])."""
-    for d in drawn:
-        if np.linalg.norm(np.asarray(d[0][:2]) - np.asarray(r.position[:2])) <= STACKED:
-            d[1].append(r.id)
-            parts[d[2]] = _text(d[3], d[4], ", ".join(f"A{i}" for i in d[1]), 10, d[5])
-            return
-    drawn.append((r.position, [r.id], len(parts), x, y, anchor))
-    parts.append(_text(x, y, f"A{r.id}", 10, anchor))
+def _label_side(x: float) -> tuple[float, str]:
+    """(dx px, text-anchor) of a label beside a mark at x px: on the side away from the
+    nearer end of the drawing, so that none leaves it."""
+    return (8.0, "start") if x < _W / 2 else (-8.0, "end")
 
 
 def _page(title: str, sub: str, body: str) -> str:

@@ -60,11 +60,12 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
-def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list:
+def _polylines(doc, layer: str, scale: float) -> list:
     """The (vertices (n, 2), closed, has arcs) of every polyline on ``layer``
-    (case-insensitive). A polyline with arc segments (bulges: a rounded wall, an apse) is
-    followed by straight segments whose chords stay within ``arc_tolerance`` (drawing
-    units) of its arcs (ezdxf's path flattening); the others keep their vertices."""
+    (case-insensitive), in drawing units (``scale`` m each). A polyline with arc segments
+    (bulges: a rounded wall, an apse) is followed by straight segments whose chords stay
+    within :data:`ARC_TOLERANCE` of its arcs (ezdxf's path flattening); the others keep
+    their vertices, but for those on a straight wall (:func:`_merge_straight`)."""
     from ezdxf import path as ezpath
 
     out = []
@@ -78,31 +79,29 @@ def _polylines(doc, layer: str, arc_tolerance: float = 0.05) -> list:
             arcs = any(v.dxf.bulge for v in e.vertices)
             closed = bool(e.is_closed)
         if arcs:
-            pts = np.array([(v.x, v.y) for v in ezpath.make_path(e).flattening(arc_tolerance)])
+            flat = ezpath.make_path(e).flattening(ARC_TOLERANCE / scale)
+            pts = np.array([(v.x, v.y) for v in flat])
         elif e.dxftype() == "LWPOLYLINE":
             pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
         else:
             pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
             pts, closed = pts[:-1], True
-        out.append((_merge_straight(pts, arc_tolerance) if closed else pts, closed, arcs))
+        out.append((_merge_straight(pts, GAP / scale) if closed else pts, closed, arcs))
     return out
 
 
-def _outlines(doc, layer: str, arc_tolerance: float, path) -> list:
+def _outlines(doc, layer: str, scale: float, path) -> list:
     """The room's outlines on ``layer``: its polylines, or where it has none, the closed
     loops of its lines and arcs (:func:`_line_loops`, every one of them in a loop; lines
     beside a polyline, a door's swing, are not the outline)."""
-    return _polylines(doc, layer, arc_tolerance) or _line_loops(
-        doc, layer, arc_tolerance, path, strict=True
-    )
+    return _polylines(doc, layer, scale) or _line_loops(doc, layer, scale, path, strict=True)
 
 
-def _merge_straight(pts: np.ndarray, arc_tolerance: float) -> np.ndarray:
-    """The closed outline pts (n, 2) without the vertices that lie within :data:`GAP` of
-    the segment between their neighbours (a wall drawn in two pieces, at a door), one at a
-    time (``arc_tolerance`` gives the drawing's unit)."""
-    tol = GAP * arc_tolerance / ARC_TOLERANCE
+def _merge_straight(pts: np.ndarray, tol: float) -> np.ndarray:
+    """The closed outline pts (n, 2) without the vertices that lie within ``tol`` (its
+    units) of the segment between their neighbours (a wall drawn in two pieces, at a
+    door), one at a time."""
     while len(pts) > 3:
         k = straight_corners(pts, tol)
         if not k.size:
@@ -115,19 +114,19 @@ def _merge_straight(pts: np.ndarray, arc_tolerance: float) -> np.ndarray:
 GAP = 1e-3
 
 
-def _line_loops(doc, layer: str, arc_tolerance: float, path, strict: bool) -> list:
-    """The closed loops that the LINE and ARC entities on ``layer`` form end to end (a
-    drawing whose walls are single lines), as :func:`_polylines` gives polylines: their
-    arcs followed within ``arc_tolerance`` (drawing units; ezdxf's edgeminer finds the
-    loops). Lines and arcs in no loop: a ValueError naming the layer and the file
-    ``path`` (``strict``), else a warning, and they are left out."""
+def _line_loops(doc, layer: str, scale: float, path, strict: bool) -> list:
+    """The closed loops that the LINE and ARC entities on ``layer`` form end to end within
+    :data:`GAP` (a drawing whose walls are single lines), as :func:`_polylines` gives
+    polylines (ezdxf's edgeminer finds the loops). Lines and arcs in no loop: a ValueError
+    naming the layer and the file ``path`` (``strict``), else a warning, and they are left
+    out."""
     from ezdxf import edgeminer, edgesmith
 
     entities = [e for e in doc.modelspace().query("LINE ARC")
                 if e.dxf.layer.lower() == layer.lower()]  # fmt: skip
     if not entities:
         return []
-    gap = GAP * arc_tolerance / ARC_TOLERANCE  # in drawing units, as arc_tolerance
+    gap = GAP / scale  # in drawing units
     edges = list(edgesmith.edges_from_entities_2d(entities, gap_tol=gap))
     loops, rest = [], edges
     while rest:
@@ -140,11 +139,11 @@ def _line_loops(doc, layer: str, arc_tolerance: float, path, strict: bool) -> li
         ids = {e.id for e in loop}
         rest = [e for e in rest if e.id not in ids]
         chain = edgesmith.path2d_from_chain(loop)
-        pts = np.array([(v.x, v.y) for v in chain.flattening(arc_tolerance)])
+        pts = np.array([(v.x, v.y) for v in chain.flattening(ARC_TOLERANCE / scale)])
         if len(pts) > 1 and np.allclose(pts[0], pts[-1]):
             pts = pts[:-1]
         arcs = any(e.payload.dxftype() == "ARC" for e in loop)
-        loops.append((_merge_straight(pts, arc_tolerance), True, arcs))
+        loops.append((_merge_straight(pts, gap), True, arcs))
     if rest and strict:
         raise ValueError(
             f"layer: {len(rest)} of the {len(edges)} lines and arcs on layer {layer!r} in "
@@ -169,17 +168,17 @@ def read_floor_plan(
     ``path`` (module docstring), shifted to the outline's origin. ValueError naming the
     file and layer for a missing layer, no outline, an open or a second outline, or an
     obstacle that is not an axis-aligned rectangle."""
-    corners, footprints, _ = _read(path, layer, unit, obstacle_layer)
+    corners, footprints, _, _ = _read(path, layer, unit, obstacle_layer)
     return corners, footprints
 
 
 def _read(path, layer, unit, obstacle_layer):
-    """:func:`read_floor_plan`'s (corners, footprints) and each footprint's label
-    (:func:`_labels`)."""
+    """:func:`read_floor_plan`'s (corners, footprints), each footprint's label
+    (:func:`_labels`) and the drawing's point that became the origin (2,) m."""
     checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
     scale = UNITS[unit]
-    outlines = _outlines(doc, layer, ARC_TOLERANCE / scale, path)
+    outlines = _outlines(doc, layer, scale, path)
     layers = sorted({e.dxf.layer for e in doc.modelspace()})
     if not outlines:
         raise ValueError(
@@ -204,9 +203,9 @@ def _read(path, layer, unit, obstacle_layer):
         )  # fmt: skip
     origin = corners.min(axis=0)
     footprints = []
-    tol = ARC_TOLERANCE / scale
-    blocks = _polylines(doc, obstacle_layer, tol) + _line_loops(doc, obstacle_layer, tol, path,
-                                                                strict=False)  # fmt: skip
+    blocks = _polylines(doc, obstacle_layer, scale) + _line_loops(
+        doc, obstacle_layer, scale, path, strict=False
+    )
     for k, (pts, closed, _) in enumerate(blocks):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -220,7 +219,8 @@ def _read(path, layer, unit, obstacle_layer):
                 "closed axis-aligned rectangle (obstacles are boxes)"
             )
         footprints.append(np.array([lo, hi]))
-    return corners - origin, footprints, _labels(doc, obstacle_layer, scale, origin, footprints)
+    labels = _labels(doc, obstacle_layer, scale, origin, footprints)
+    return corners - origin, footprints, labels, origin
 
 
 def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, float] | None]:
@@ -240,15 +240,14 @@ def outline_origin(path, *, layer: str = "room", unit: str = "m") -> np.ndarray:
     """(2,) m: the point of the drawing ``path`` that becomes the room's origin (the lowest
     x and y of its outline on ``layer``; module docstring)."""
     checks.choice("unit", unit, list(UNITS))
-    outlines = _outlines(_doc(path), layer, ARC_TOLERANCE / UNITS[unit], path)
+    outlines = _outlines(_doc(path), layer, UNITS[unit], path)
     if not outlines:
-        raise ValueError(f"layer: no polyline on layer {layer!r} in {path}")
+        raise ValueError(f"layer: no outline on layer {layer!r} in {path}")
     return outlines[0][0].min(axis=0) * UNITS[unit]
 
 
-def _say_shift(path, layer, unit) -> None:
-    """A warning where the drawing's outline does not start at its origin."""
-    o = outline_origin(path, layer=layer, unit=unit)
+def _say_shift(path, o) -> None:
+    """A warning where the drawing's outline does not start at its origin: o (2,) m."""
     if np.any(np.abs(o) > 1e-9):
         logger.warning(
             "%s: the floor plan is moved by (%.3f, %.3f) m so that its lowest x and y are 0: "
@@ -272,7 +271,7 @@ def room_from_dxf(
     ``obstacle_height`` m (needed when the layer has any such); every other keyword is a
     :class:`~simulation.room.Room` field."""
     h = checks.real("height", height, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="m")
-    corners, footprints, labels = _read(path, layer, unit, obstacle_layer)
+    corners, footprints, labels, origin = _read(path, layer, unit, obstacle_layer)
     obstacles = list(kw.pop("obstacles", None) or [])
     unlabelled = sum(lab is None for lab in labels)
     if unlabelled and obstacle_height is None:
@@ -289,7 +288,7 @@ def room_from_dxf(
         obstacles.append({"min": [lo[0], lo[1], lab[1]], "max": [hi[0], hi[1], lab[2]],
                           "name": lab[0]})  # fmt: skip
     kw.setdefault("name", Path(str(path)).stem)
-    _say_shift(path, layer, unit)
+    _say_shift(path, origin)
     size = corners.max(axis=0)
     rectangle = len(corners) == 4 and np.all(
         np.isclose(corners[:, 0], 0.0) | np.isclose(corners[:, 0], size[0])

@@ -9,6 +9,7 @@ import pytest
 
 import analysis
 from analysis import figures as F
+from analysis.stacking import stacks
 from simulation import Room
 
 ROOM = Room.techtile()
@@ -368,7 +369,7 @@ def test_anchors_on_one_spot_of_a_view_share_a_label():
     assert [t.get_text() for t in elevation.texts] == ["1", "2", "3", "4", "5"]
     # a chain of near spots is one stack; anchors 6 cm apart are not
     chain = np.array([[0, 0], [0.04, 0], [0.08, 0], [1.0, 1.0], [1.06, 1.0]])
-    assert F._stacks(chain) == [[0, 1, 2], [3], [4]]
+    assert stacks(chain) == [[0, 1, 2], [3], [4]]
 
 
 def test_one_solid_of_several_boxes_gets_one_legible_height_label():

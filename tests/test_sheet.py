@@ -151,3 +151,12 @@ def test_bad_floor_plans_exit_2_with_one_line(tmp_path, capsys, args, needle):
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert needle in err and len(err.splitlines()) == 1
+
+
+def test_a_sheet_with_ceiling_anchors_only(tmp_path):
+    # no wall anchor: no stack to label on the ceiling plan, one label per ceiling anchor
+    room = Room.techtile()
+    a = np.array([[1.0, 1.0, 2.37], [7.0, 1.0, 2.37], [1.0, 3.0, 2.37], [7.0, 3.0, 2.37]])
+    html = write_sheet(tmp_path, room, a)["html"].read_text()
+    plan = html.split("<svg")[1].split("</svg>")[0]
+    assert all(f">A{k}<" in plan for k in range(1, 5)) and "#2ca02c" not in plan
