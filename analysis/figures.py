@@ -74,6 +74,9 @@ ANCHOR_COLOR = "#E69F00"
 #: keep-out boxes (grey, hatched in 2D) and tag-zone outlines (dashed)
 KEEPOUT_COLOR = "0.3"
 ZONE_COLOR = "0.1"
+#: an obstacle narrower and shallower than this share of the room's larger plan side (a
+#: column in a hall: smaller than its height tag at a figure's scale) has the tag above it
+SMALL_OBSTACLE = 0.07
 #: CDF lines are reduced to at most this many points (quantiles) to keep figures fast
 _MAX_CDF_POINTS = 2000
 
@@ -256,11 +259,17 @@ def _draw_room2d(ax, room: Room, iu: int, iv: int, cut=None) -> None:
                                edgecolor="black", linewidth=0.8, zorder=2.6, **style))  # fmt: skip
     if (iu, iv) != (0, 1):
         return
+    small = SMALL_OBSTACLE * max(L[0], L[1])
     for ob in _labelled(room.obstacles):
         lo, hi = ob.lo, ob.hi
+        centre = ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2)
+        # a box smaller than its tag (a column in a hall) gets the tag above it, not on it
+        beside = hi[0] - lo[0] < small and hi[1] - lo[1] < small
         # dark on a white tag: legible on the hatch, and beside a box thinner than it
-        ax.annotate(_obstacle_heights(lo, hi), ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2),
-                    fontsize=6, ha="center", va="center", color="black", zorder=2.7,
+        ax.annotate(_obstacle_heights(lo, hi), (centre[0], hi[1]) if beside else centre,
+                    xytext=(0, 1.5 if beside else 0), textcoords="offset points",
+                    fontsize=6, ha="center", va="bottom" if beside else "center",
+                    color="black", zorder=2.7, gid="obstacle-height",
                     bbox=dict(boxstyle="round,pad=0.15", facecolor="white", alpha=0.8,
                               edgecolor="none"))  # fmt: skip
 
@@ -658,6 +667,10 @@ def plan_view(
     anchors = _as_points(anchors, "anchors")
     L = room.size
     fig = new_figure(figsize or (10.0, 3.6), dpi)
+    # room between the titles: at some proportions of a room (its depth about 0.6 of its
+    # width) the constrained layout of the equal-aspect plan left the plan's title on the
+    # figure's
+    fig.get_layout_engine().set(h_pad=0.1)
     views = ((2, "plan (from above)"), (1, "elevation (from the south)"))
     for ax, (k, label) in zip(fig.subplots(1, 2).ravel(), views, strict=True):
         iu, iv = (i for i in range(3) if i != k)

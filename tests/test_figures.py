@@ -390,6 +390,34 @@ def test_one_solid_of_several_boxes_gets_one_legible_height_label():
         assert t.get_color() == "black" and t.get_bbox_patch() is not None
 
 
+def test_a_column_smaller_than_its_height_tag_has_the_tag_above_it():
+    # a car park: 0.5 m columns in a 24 m hall are smaller than their tags, which used to
+    # hide them; a ramp wall of 10 m keeps its tag on it
+    room = Room(size=(24.0, 15.0, 2.6), obstacles=[
+        {"min": [7.25, 4.75, 0.0], "max": [7.75, 5.25, 2.6], "name": "column"},
+        {"min": [2.0, 2.0, 0.0], "max": [12.0, 2.3, 1.2], "name": "ramp"}])  # fmt: skip
+    anchors = np.array([[1.0, 1.0, 2.5], [23.0, 1.0, 2.5], [12.0, 14.0, 2.5], [20.0, 8.0, 2.5]])
+    plan, _ = data_axes(F.plan_view(room, anchors, dpi=40))
+    tags = {t.get_text(): t for t in plan.texts if t.get_gid() == "obstacle-height"}
+    np.testing.assert_allclose(tags["2.6 m"].xy, (7.5, 5.25))  # the column's top edge
+    assert tags["2.6 m"].get_va() == "bottom" and tags["2.6 m"].xyann[1] > 0
+    np.testing.assert_allclose(tags["1.2 m"].xy, (7.0, 2.15))  # the wall's centre
+    assert tags["1.2 m"].get_va() == "center"
+
+
+@pytest.mark.parametrize("depth", [6.0, 14.4, 15.0])
+def test_the_plan_views_titles_stay_clear_of_the_figures_title(depth):
+    # at a depth about 0.6 of the width the equal-aspect plan's title ran into the figure's
+    width = 24.0 if depth > 10 else 10.0
+    room = Room(size=(width, depth, 2.6))
+    fig = F.plan_view(room, np.array([[1, 1, 2.5], [width - 1, 1, 2.5], [1, depth - 1, 2.5],
+                                      [width - 1, depth - 1, 2.5]]))  # fmt: skip
+    fig.canvas.draw()
+    top = fig._suptitle.get_window_extent().y0
+    for ax in fig.axes:
+        assert ax.title.get_window_extent().y1 < top
+
+
 def test_a_zone_over_a_floor_plan_is_drawn_inside_the_plan_only():
     # an L whose zone box covers the missing corner: its outline is clipped to the L
     room = Room.from_corners([[0, 0], [6, 0], [6, 3], [3, 3], [3, 5], [0, 5]], 3.0,

@@ -193,6 +193,26 @@ def test_a_slanted_wall_is_drawn_and_a_hanging_duct_labelled_with_its_heights(pa
     assert page.locator("#plan .obstacle").count() == 1
 
 
+def test_a_column_smaller_than_its_label_keeps_it_above_not_on_it(page, tmp_path):
+    # a car park: a 0.5 m column in a 24 m hall is smaller than its label, which hid it; a
+    # 10 m ramp wall keeps its label on it
+    room = tmp_path / "garage.toml"
+    room.write_text(
+        'name = "garage"\ncorners = [[0, 0], [24, 0], [24, 15], [0, 15]]\nheight = 2.6\n'
+        '[[obstacle]]\nname = "column"\nmin = [7.25, 4.75, 0.0]\nmax = [7.75, 5.25, 2.6]\n'
+        '[[obstacle]]\nname = "ramp"\nmin = [2.0, 2.0, 0.0]\nmax = [12.0, 2.6, 1.2]\n'
+    )
+    page.set_input_files("#room-upload", str(room))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('garage')")
+    boxes = page.evaluate(
+        """() => [...document.querySelectorAll('#plan .obstacle, #plan .obstacle-label')]
+                 .map((e) => { const b = e.getBBox(); return [b.y, b.y + b.height]; })"""
+    )
+    (column, ramp), (column_label, ramp_label) = boxes[:2], boxes[2:]
+    assert column_label[1] <= column[0]  # above the column (the page's y points down)
+    assert ramp[0] < (ramp_label[0] + ramp_label[1]) / 2 < ramp[1]  # on the wall
+
+
 def test_a_dxf_plan_moved_to_the_origin_says_so(page):
     # the example floor plan's outline starts at (12, 3) m in the drawing (in millimetres)
     dxf = Path(__file__).resolve().parent.parent / "examples" / "floorplan.dxf"

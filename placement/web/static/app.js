@@ -178,10 +178,16 @@ function drawPlan() {
       : { fill: "none", stroke: "#252525", "stroke-dasharray": "6 3", class: "obstacle off-slice" });
   }
   for (const o of labelled(r.obstacles)) {
-    label(svg, f.px((o.min[0] + o.max[0]) / 2), f.py((o.min[1] + o.max[1]) / 2) + 4,
+    const t = label(svg, f.px((o.min[0] + o.max[0]) / 2), f.py((o.min[1] + o.max[1]) / 2) + 4,
       `${o.name || "obstacle"} ${o.min[2] > 0 ? `${heightText(o.min[2])}–` : ""}${heightText(o.max[2])} m`,
       // dark with a white halo: legible on the box and beside one thinner than the text
       { fill: "#252525", stroke: "#fff", "stroke-width": 3, "paint-order": "stroke", class: "obstacle-label" });
+    // a box narrower than its label and less than two lines deep (a column in a hall)
+    // would be hidden by it: the label goes above the box
+    const b = t.getBBox();
+    if (b.width > (o.max[0] - o.min[0]) * f.scale && 2 * b.height > (o.max[1] - o.min[1]) * f.scale) {
+      t.setAttribute("y", f.py(o.max[1]) - 4);
+    }
   }
   drawAnchors(svg, f, [0, 1], "plan");
 }
