@@ -5,14 +5,16 @@ polyline (LWPOLYLINE or POLYLINE), or the LINEs and ARCs joined end to end into 
 loop, on a named layer (default ``room``), the obstacles the closed axis-aligned rectangles
 (polylines or four lines) on another (default ``obstacles``), standing from the floor
 to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
-(as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Coordinates are converted
-from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and shifted so that the
-outline's lowest x and y are 0, the room's origin (a warning on the ``simulation.dxf``
-logger gives the shift where there is one: positions in the room, a layout's anchors
-among them, are the drawing's minus that shift). An outline with arc segments (bulges: a
-rounded wall) is followed by straight walls within :data:`ARC_TOLERANCE` of its arcs, with
-a warning. An axis-aligned rectangular outline gives the shoebox of its size, any other
-outline a polygonal room (:meth:`Room.from_corners`).
+(as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Both may be drawn inside
+blocks and placed by block references (a column drawn once, placed at every grid point).
+Coordinates are converted from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and
+shifted so that the outline's lowest x and y are 0, the room's origin (a warning on the
+``simulation.dxf`` logger gives the shift where there is one: positions in the room, a
+layout's anchors among them, are the drawing's minus that shift). An outline with arc
+segments (bulges: a rounded wall) is followed by straight walls within
+:data:`ARC_TOLERANCE` of its arcs, with a warning. An axis-aligned rectangular outline
+gives the shoebox of its size, any other outline a polygonal room
+(:meth:`Room.from_corners`).
 
 **Writing** (:func:`write_plan`): the room's outline, obstacles, keep-outs and tag zones as
 closed polylines on their own layers (``room``, ``obstacles``, ``keepouts``, ``zones``; a
@@ -60,6 +62,24 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
+def _entities(doc, types: tuple[str, ...], layer: str):
+    """The entities of the drawing's model space of the DXF ``types`` on ``layer``
+    (case-insensitive), those inside block references (INSERTs: a column or a desk drawn
+    once and placed many times) included, placed as the references place them (ezdxf's
+    virtual entities). An entity of a block on layer "0" is on its reference's layer, as
+    CAD programs draw it."""
+
+    def walk(entities, ref_layer):
+        for e in entities:
+            on = e.dxf.layer if ref_layer is None or e.dxf.layer != "0" else ref_layer
+            if e.dxftype() == "INSERT":
+                yield from walk(e.virtual_entities(), on)
+            elif e.dxftype() in types and on.lower() == layer.lower():
+                yield e
+
+    return walk(doc.modelspace(), None)
+
+
 def _polylines(doc, layer: str, scale: float) -> list:
     """The (vertices (n, 2), closed, has arcs) of every polyline on ``layer``
     (case-insensitive), in drawing units (``scale`` m each). A polyline with arc segments
@@ -69,9 +89,7 @@ def _polylines(doc, layer: str, scale: float) -> list:
     from ezdxf import path as ezpath
 
     out = []
-    for e in doc.modelspace().query("LWPOLYLINE POLYLINE"):
-        if e.dxf.layer.lower() != layer.lower():
-            continue
+    for e in _entities(doc, ("LWPOLYLINE", "POLYLINE"), layer):
         if e.dxftype() == "LWPOLYLINE":
             arcs = bool(e.has_arc)
             closed = bool(e.closed)
@@ -122,8 +140,7 @@ def _line_loops(doc, layer: str, scale: float, path, strict: bool) -> list:
     out."""
     from ezdxf import edgeminer, edgesmith
 
-    entities = [e for e in doc.modelspace().query("LINE ARC")
-                if e.dxf.layer.lower() == layer.lower()]  # fmt: skip
+    entities = list(_entities(doc, ("LINE", "ARC"), layer))
     if not entities:
         return []
     gap = GAP / scale  # in drawing units

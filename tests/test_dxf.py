@@ -151,6 +151,35 @@ def test_an_outline_and_obstacles_drawn_as_lines_read_as_polylines(tmp_path):
         room_from_dxf(tmp_path / "gap.dxf", 3.0)
 
 
+def test_obstacles_placed_as_block_references_are_read(tmp_path):
+    """Columns drawn once as a block and placed three times (one of them through a block
+    of a column pair: a nested reference), a desk block drawn on the obstacle layer and
+    placed turned by 90°, in millimetres: every box where it was placed. A block's entity
+    on layer "0" takes its reference's layer; a reference on another layer adds nothing."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (12000, 0), (12000, 8000), (0, 8000)], close=True,
+                       dxfattribs={"layer": "room"})  # fmt: skip
+    column = doc.blocks.new("COLUMN")
+    column.add_lwpolyline([(-250, -250), (250, -250), (250, 250), (-250, 250)], close=True)
+    pair = doc.blocks.new("PAIR")
+    for x in (0, 4000):
+        pair.add_blockref("COLUMN", (x, 0))
+    msp.add_blockref("COLUMN", (4000, 4000), dxfattribs={"layer": "obstacles"})
+    msp.add_blockref("PAIR", (4000, 6000), dxfattribs={"layer": "obstacles"})
+    msp.add_blockref("COLUMN", (10000, 1000), dxfattribs={"layer": "furniture"})
+    desk = doc.blocks.new("DESK")
+    desk.add_lwpolyline([(0, 0), (1600, 0), (1600, 800), (0, 800)], close=True,
+                        dxfattribs={"layer": "obstacles"})  # fmt: skip
+    msp.add_blockref("DESK", (1000, 1000), dxfattribs={"layer": "furniture", "rotation": 90})
+    doc.saveas(tmp_path / "blocks.dxf")
+    room = room_from_dxf(tmp_path / "blocks.dxf", 3.0, unit="mm", obstacle_height=1.0)
+    boxes = sorted((round(o.lo[0], 6), round(o.lo[1], 6), round(o.hi[0], 6), round(o.hi[1], 6))
+                   for o in room.obstacles)  # fmt: skip
+    assert boxes == [(0.2, 1.0, 1.0, 2.6), (3.75, 3.75, 4.25, 4.25), (3.75, 5.75, 4.25, 6.25),
+                     (7.75, 5.75, 8.25, 6.25)]  # fmt: skip
+
+
 def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
     """A door's swing drawn as a line on the outline's layer beside the closed polyline, and
     a stray line on the obstacles' layer beside a rectangle: the polylines are read, the
