@@ -62,8 +62,8 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
-def _entities(doc, types: tuple[str, ...], layer: str):
-    """The entities of the drawing's model space of the DXF ``types`` on ``layer``
+def _entities(doc, types: tuple[str, ...] | None, layer: str):
+    """The entities of the drawing's model space of the DXF ``types`` (None: all) on ``layer``
     (case-insensitive), those inside block references (INSERTs: a column or a desk drawn
     once and placed many times) included, placed as the references place them (ezdxf's
     virtual entities). An entity of a block on layer "0" is on its reference's layer, as
@@ -74,7 +74,7 @@ def _entities(doc, types: tuple[str, ...], layer: str):
             on = e.dxf.layer if ref_layer is None or e.dxf.layer != "0" else ref_layer
             if e.dxftype() == "INSERT":
                 yield from walk(e.virtual_entities(), on)
-            elif e.dxftype() in types and on.lower() == layer.lower():
+            elif (types is None or e.dxftype() in types) and on.lower() == layer.lower():
                 yield e
 
     return walk(doc.modelspace(), None)
@@ -219,10 +219,19 @@ def _read(path, layer, unit, obstacle_layer):
             "sources to simulate)", path, layer, ARC_TOLERANCE, len(corners),
         )  # fmt: skip
     origin = corners.min(axis=0)
+    footprints = _footprints(doc, obstacle_layer, scale, origin, path)
+    labels = _labels(doc, obstacle_layer, scale, origin, footprints)
+    return corners - origin, footprints, labels, origin
+
+
+def _footprints(doc, layer, scale, origin, path) -> list[np.ndarray]:
+    """The obstacles' footprints (2, 2) m (lowest, highest x and y, from the room's
+    ``origin``) on ``layer``: its closed axis-aligned rectangles (polylines or lines; any
+    other closed shape: a ValueError), then its circles (a round column) as the squares
+    that hold them, with a warning; entities of other kinds there are left out with a
+    warning naming them."""
     footprints = []
-    blocks = _polylines(doc, obstacle_layer, scale) + _line_loops(
-        doc, obstacle_layer, scale, path, strict=False
-    )
+    blocks = _polylines(doc, layer, scale) + _line_loops(doc, layer, scale, path, strict=False)
     for k, (pts, closed, _) in enumerate(blocks):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -232,12 +241,28 @@ def _read(path, layer, unit, obstacle_layer):
         )
         if not closed or len(pts) != 4 or not on_edges:
             raise ValueError(
-                f"obstacle_layer: polyline {k} on layer {obstacle_layer!r} in {path} is not a "
+                f"obstacle_layer: polyline {k} on layer {layer!r} in {path} is not a "
                 "closed axis-aligned rectangle (obstacles are boxes)"
             )
         footprints.append(np.array([lo, hi]))
-    labels = _labels(doc, obstacle_layer, scale, origin, footprints)
-    return corners - origin, footprints, labels, origin
+    circles = list(_entities(doc, ("CIRCLE",), layer))
+    for c in circles:
+        centre = np.array([c.dxf.center.x, c.dxf.center.y]) * scale - origin
+        footprints.append(np.array([centre - c.dxf.radius * scale, centre + c.dxf.radius * scale]))
+    if circles:
+        logger.warning("%s: %d circle(s) on layer %r (round columns) read as the squares that "
+                       "hold them: obstacles are boxes", path, len(circles), layer)  # fmt: skip
+    other = sorted(e.dxftype() for e in _entities(doc, None, layer)
+                   if e.dxftype() not in READ_ON_OBSTACLES)  # fmt: skip
+    if other:
+        kinds = ", ".join(f"{other.count(t)} {t}" for t in dict.fromkeys(other))
+        logger.warning("%s: left out on layer %r: %s (obstacles are read from closed "
+                       "rectangles, lines and circles)", path, layer, kinds)  # fmt: skip
+    return footprints
+
+
+#: the DXF entities the obstacles' layer is read from (texts: their labels)
+READ_ON_OBSTACLES = ("LWPOLYLINE", "POLYLINE", "LINE", "ARC", "CIRCLE", "TEXT", "MTEXT")
 
 
 def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, float] | None]:

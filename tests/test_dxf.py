@@ -180,6 +180,27 @@ def test_obstacles_placed_as_block_references_are_read(tmp_path):
                      (7.75, 5.75, 8.25, 6.25)]  # fmt: skip
 
 
+def test_a_round_column_is_its_square_and_what_is_not_read_is_said(tmp_path, caplog):
+    """A round column (a CIRCLE of radius 0.3 m at (4, 3)) is the square that holds it, with
+    a warning; a hatch and a spline on the obstacle layer are named as left out."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (8, 0), (8, 6), (0, 6)], close=True, dxfattribs={"layer": "room"})
+    msp.add_circle((4, 3), 0.3, dxfattribs={"layer": "obstacles"})
+    msp.add_circle((1, 1), 0.2, dxfattribs={"layer": "furniture"})  # not an obstacle
+    msp.add_hatch(dxfattribs={"layer": "obstacles"}).paths.add_polyline_path(
+        [(6, 1), (7, 1), (7, 2)], is_closed=True
+    )
+    msp.add_spline([(1, 5), (2, 5.5), (3, 5)], dxfattribs={"layer": "obstacles"})
+    doc.saveas(tmp_path / "round.dxf")
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room = room_from_dxf(tmp_path / "round.dxf", 3.0, obstacle_height=3.0)
+    (column,) = room.obstacles
+    np.testing.assert_allclose([column.lo, column.hi], [[3.7, 2.7, 0.0], [4.3, 3.3, 3.0]])
+    assert "1 circle(s) on layer 'obstacles' (round columns) read as the squares" in caplog.text
+    assert "left out on layer 'obstacles': 1 HATCH, 1 SPLINE" in caplog.text
+
+
 def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
     """A door's swing drawn as a line on the outline's layer beside the closed polyline, and
     a stray line on the obstacles' layer beside a rectangle: the polylines are read, the

@@ -225,6 +225,37 @@ def test_a_dxf_plan_moved_to_the_origin_says_so(page):
     assert "moved by (-12.000, -3.000) m to start at 0" in name
 
 
+def test_what_the_dxf_reader_says_of_a_drawing_is_shown(page, tmp_path):
+    # a round column (a circle: read as its square) and a hatch (left out) on the obstacles'
+    # layer: both said under the title, without the file's path
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (8, 0), (8, 6), (0, 6)], close=True, dxfattribs={"layer": "room"})
+    msp.add_circle((4, 3), 0.3, dxfattribs={"layer": "obstacles"})
+    msp.add_hatch(dxfattribs={"layer": "obstacles"}).paths.add_polyline_path(
+        [(6, 1), (7, 1), (7, 2)], is_closed=True
+    )
+    doc.saveas(tmp_path / "round.dxf")
+    page.fill("#room-height", "3")
+    page.fill("#obstacle-height", "3")
+    page.select_option("#dxf-unit", "m")
+    page.set_input_files("#room-upload", str(tmp_path / "round.dxf"))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('round')")
+    notes = page.locator("#room-notes")
+    assert notes.is_visible()
+    text = notes.inner_text()
+    assert "1 circle(s) on layer 'obstacles' (round columns) read as the squares" in text
+    assert "left out on layer 'obstacles': 1 HATCH" in text
+    assert str(tmp_path) not in text
+    box = tmp_path / "box.toml"  # a room file: nothing to say
+    box.write_text('name = "box"\ncorners = [[0, 0], [5, 0], [5, 4], [0, 4]]\nheight = 3.0\n')
+    page.set_input_files("#room-upload", str(box))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('box')")
+    assert not page.locator("#room-notes").is_visible()
+
+
 def test_a_solid_of_several_boxes_is_labelled_once_and_a_zone_kept_in_the_plan(page, tmp_path):
     # an L whose zone box covers the missing corner; a pillar of three boxes meeting face to
     # face and a 0.45 m bench

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import io
+import logging
 import re
 import threading
 from pathlib import Path
@@ -123,7 +124,8 @@ class Workspace:
             "dxf_layer": "room",
             **options,
         }
-        room = load_room(None if path is None else str(path), SimpleNamespace(**opts))
+        with _warnings("simulation.dxf") as notes:
+            room = load_room(None if path is None else str(path), SimpleNamespace(**opts))
         chosen = _system(system, path, room)
         argv = [] if path is None else ["--room", str(path)]
         if path is not None and str(path).lower().endswith(".dxf"):
@@ -144,6 +146,9 @@ class Workspace:
         with self.lock:
             self.room, self.room_path, self.room_argv = room, path, argv
             self.room_shift = shift
+            # what the DXF reader said of the drawing (arcs followed, columns read as
+            # squares, entities left out), but the move, which room_shift gives
+            self.room_notes = [n.split(": ", 1)[-1] for n in notes if "is moved by" not in n]
             self.system, self.system_name = chosen, system
             self.anchors = naive_layout(room, FIRST_ANCHORS)
             self.field = None
@@ -208,6 +213,7 @@ class Workspace:
             "room_file": None if self.room_path is None else Path(self.room_path).name,
             # (dx, dy) m: a DXF plan moved to the room's origin (simulation.dxf)
             "room_shift": self.room_shift,
+            "room_notes": self.room_notes,
             "room_id": self._file_id(self.room_path),
             "system": {
                 "name": system.name,
@@ -330,6 +336,24 @@ class Workspace:
         else:
             run_cli(["export", str(folder), "--dxf", str(out / "plan.dxf")])
         return out / EXPORTS[kind]
+
+
+@contextlib.contextmanager
+def _warnings(name: str):
+    """The messages of the warnings the logger ``name`` gives within the block (a list
+    filled as they come)."""
+    messages: list[str] = []
+
+    class Keep(logging.Handler):
+        def emit(self, record) -> None:
+            messages.append(record.getMessage())
+
+    handler, log = Keep(logging.WARNING), logging.getLogger(name)
+    log.addHandler(handler)
+    try:
+        yield messages
+    finally:
+        log.removeHandler(handler)
 
 
 def _system(name: str | None, room_file, room):

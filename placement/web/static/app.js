@@ -394,6 +394,10 @@ function render(data) {
   const shift = data.room_shift ? `, moved by (${data.room_shift.map((v) => v.toFixed(3)).join(", ")}) m to start at 0` : "";
   document.getElementById("room-name").textContent = `— ${data.room.name}${data.room_file ? ` (${data.room_file}${shift})` : ""}`;
   document.getElementById("system-line").textContent = data.system.describe;
+  // what the DXF reader said of the drawing (arcs, round columns, entities left out)
+  const notes = document.getElementById("room-notes");
+  notes.textContent = (data.room_notes || []).join(" ");
+  notes.hidden = !notes.textContent;
   const sel = document.getElementById("room-file");
   // each file by its name (its folder's index is the value), the room open selected
   sel.innerHTML = data.files.map((f) => `<option value="${f}">${f.slice(f.indexOf("/") + 1)}</option>`).join("");
