@@ -7,10 +7,12 @@ loop, on a named layer (default ``room``), the obstacles the closed axis-aligned
 to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
 (as :func:`write_plan` labels them), named NAME from Z0 to Z1 m. Both may be drawn inside
 blocks and placed by block references (a column drawn once, placed at every grid point).
-Coordinates are converted from the drawing's unit (``mm``, ``cm`` or ``m``) to metres and
-shifted so that the outline's lowest x and y are 0, the room's origin (a warning on the
-``simulation.dxf`` logger gives the shift where there is one: positions in the room, a
-layout's anchors among them, are the drawing's minus that shift). An outline with arc
+Coordinates are converted to metres from the drawing's unit (``mm``, ``cm``, ``m``, ``in``
+or ``ft``: the one given, else the one the drawing's header declares, ``$INSUNITS``, else
+metres; a warning where the two differ) and shifted so that the outline's lowest x and y
+are 0, the room's origin (a warning on the ``simulation.dxf`` logger gives the shift where
+there is one: positions in the room, a layout's anchors among them, are the drawing's
+minus that shift). An outline with arc
 segments (bulges: a rounded wall) is followed by straight walls within
 :data:`ARC_TOLERANCE` of its arcs, with a warning. An axis-aligned rectangular outline
 gives the shoebox of its size, any other outline a polygonal room
@@ -41,9 +43,9 @@ from simulation.room import SIZE_RANGE, Room
 logger = logging.getLogger(__name__)
 
 #: the drawing units read and written, in metres per unit
-UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
+UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 #: DXF $INSUNITS codes of those units
-INSUNITS = {"mm": 4, "cm": 5, "m": 6}
+INSUNITS = {"mm": 4, "cm": 5, "m": 6, "in": 1, "ft": 2}
 #: the layers written by :func:`write_plan` (and read by default)
 LAYERS = ("room", "obstacles", "keepouts", "zones", "anchors")
 #: a box's label as :func:`_label` writes it: "NAME z Z0-Z1 m" (heights in m)
@@ -179,7 +181,7 @@ ARC_TOLERANCE = 0.05
 
 
 def read_floor_plan(
-    path, *, layer: str = "room", unit: str = "m", obstacle_layer: str = "obstacles"
+    path, *, layer: str = "room", unit: str | None = None, obstacle_layer: str = "obstacles"
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """(corners (n, 2), obstacle footprints [(2, 2) min/max rows]) in metres from the DXF
     ``path`` (module docstring), shifted to the outline's origin. ValueError naming the
@@ -192,9 +194,8 @@ def read_floor_plan(
 def _read(path, layer, unit, obstacle_layer):
     """:func:`read_floor_plan`'s (corners, footprints), each footprint's label
     (:func:`_labels`) and the drawing's point that became the origin (2,) m."""
-    checks.choice("unit", unit, list(UNITS))
     doc = _doc(path)
-    scale = UNITS[unit]
+    scale = UNITS[_unit(doc, unit, path)]
     outlines = _outlines(doc, layer, scale, path)
     layers = sorted({e.dxf.layer for e in doc.modelspace()})
     if not outlines:
@@ -278,14 +279,34 @@ def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, flo
             for lo, _ in footprints]  # fmt: skip
 
 
-def outline_origin(path, *, layer: str = "room", unit: str = "m") -> np.ndarray:
+def outline_origin(path, *, layer: str = "room", unit: str | None = None) -> np.ndarray:
     """(2,) m: the point of the drawing ``path`` that becomes the room's origin (the lowest
     x and y of its outline on ``layer``; module docstring)."""
-    checks.choice("unit", unit, list(UNITS))
-    outlines = _outlines(_doc(path), layer, UNITS[unit], path)
+    doc = _doc(path)
+    scale = UNITS[_unit(doc, unit, path, quiet=True)]
+    outlines = _outlines(doc, layer, scale, path)
     if not outlines:
         raise ValueError(f"layer: no outline on layer {layer!r} in {path}")
-    return outlines[0][0].min(axis=0) * UNITS[unit]
+    return outlines[0][0].min(axis=0) * scale
+
+
+def _unit(doc, unit: str | None, path, quiet: bool = False) -> str:
+    """The drawing's unit: ``unit`` (one of :data:`UNITS`), or where it is None the one its
+    header declares ($INSUNITS), metres for a drawing without one. A ValueError for another
+    unit; a warning where ``unit`` contradicts the header (unless ``quiet``)."""
+    if unit is not None:
+        checks.choice("unit", unit, list(UNITS))
+    code = int(doc.header.get("$INSUNITS", 0) or 0)
+    declared = next((u for u, c in INSUNITS.items() if c == code), None)
+    if unit is None and code and declared is None:
+        raise ValueError(
+            f"unit: {path} declares its unit as $INSUNITS {code}, none of "
+            f"{', '.join(UNITS)}: give the drawing's unit"
+        )
+    if unit is not None and declared is not None and unit != declared and not quiet:
+        logger.warning("%s: the drawing declares its unit as %s ($INSUNITS %d); read in %s as "
+                       "asked", path, declared, code, unit)  # fmt: skip
+    return unit if unit is not None else declared or "m"
 
 
 def _say_shift(path, o) -> None:
@@ -303,7 +324,7 @@ def room_from_dxf(
     height: float,
     *,
     layer: str = "room",
-    unit: str = "m",
+    unit: str | None = None,
     obstacle_layer: str = "obstacles",
     obstacle_height: float | None = None,
     **kw,
@@ -389,15 +410,15 @@ def write_plan(path, room, anchors, *, unit: str = "m", surfaces=None) -> Path:
     return write_with(Path(str(path)), doc.saveas)
 
 
-def read_anchors(path, unit: str = "m") -> np.ndarray:
+def read_anchors(path, unit: str | None = None) -> np.ndarray:
     """(M, 3) the anchors of a DXF written by :func:`write_plan`, in metres (x, y from the
-    inserts, z from their ``Z`` attribute), in ID order."""
-    checks.choice("unit", unit, list(UNITS))
+    inserts, z from their ``Z`` attribute), in ID order (``unit``: as :func:`room_from_dxf`)."""
     doc = _doc(path)
+    scale = UNITS[_unit(doc, unit, path)]
     rows = []
     for ref in doc.modelspace().query('INSERT[name=="ANCHOR"]'):
         att = {a.dxf.tag: a.dxf.text for a in ref.attribs}
-        x, y = ref.dxf.insert.x * UNITS[unit], ref.dxf.insert.y * UNITS[unit]
+        x, y = ref.dxf.insert.x * scale, ref.dxf.insert.y * scale
         rows.append((int(att["ID"]), x, y, float(att["Z"])))
     rows.sort()
     return np.array([r[1:] for r in rows], dtype=float).reshape(-1, 3)

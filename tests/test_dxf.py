@@ -50,13 +50,42 @@ def test_a_drawing_away_from_the_origin_says_how_far_it_moved(tmp_path, caplog):
     with caplog.at_level("WARNING", logger="simulation.dxf"):
         room_from_dxf(path, 2.4, unit="mm")
     np.testing.assert_allclose(outline_origin(path, unit="mm"), [1.5, 2.5])
-    (record,) = caplog.records
+    (record,) = (r for r in caplog.records if "moved" in r.getMessage())
     assert "moved by (-1.500, -2.500) m" in record.getMessage()
     caplog.clear()
     at_origin = _drawing(tmp_path / "lab.dxf", [("room", L_CORNERS, True)])
     with caplog.at_level("WARNING", logger="simulation.dxf"):
         room_from_dxf(at_origin, 3.0)
     assert not caplog.records
+
+
+def test_the_drawings_declared_unit_is_the_default(tmp_path, caplog):
+    """A drawing in millimetres that says so ($INSUNITS 4) reads in metres with no unit
+    given; a unit given that contradicts the header is used, with a warning; a drawing in
+    feet reads too; an unknown declared unit (light years, 16) is refused by name."""
+    from simulation.dxf import read_floor_plan
+
+    def drawing(name, code, scale):
+        doc = ezdxf.new("R2010")
+        doc.header["$INSUNITS"] = code
+        doc.modelspace().add_lwpolyline([(x * scale, y * scale) for x, y in L_CORNERS],
+                                        close=True, dxfattribs={"layer": "room"})  # fmt: skip
+        doc.saveas(tmp_path / name)
+        return tmp_path / name
+
+    mm = drawing("mm.dxf", 4, 1000.0)
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        corners, _ = read_floor_plan(mm)
+    assert not caplog.records
+    np.testing.assert_allclose(corners.max(axis=0), [7.0, 6.0])
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        corners, _ = read_floor_plan(mm, unit="cm")
+    np.testing.assert_allclose(corners.max(axis=0), [70.0, 60.0])
+    assert "declares its unit as mm ($INSUNITS 4); read in cm as asked" in caplog.text
+    corners, _ = read_floor_plan(drawing("ft.dxf", 2, 1 / 0.3048))
+    np.testing.assert_allclose(corners.max(axis=0), [7.0, 6.0])
+    with pytest.raises(ValueError, match=r"unit: .* declares its unit as \$INSUNITS 16"):
+        read_floor_plan(drawing("ly.dxf", 16, 1.0))
 
 
 def test_an_outline_with_an_arc_is_followed_within_five_centimetres(tmp_path, caplog):

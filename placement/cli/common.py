@@ -10,7 +10,7 @@ import numpy as np
 
 from placement.serialization import to_jsonable
 from simulation import checks
-from simulation.dxf import room_from_dxf
+from simulation.dxf import UNITS, room_from_dxf
 from simulation.output import write_file
 from simulation.room import Room
 from simulation.statistics import penalty_text
@@ -44,7 +44,10 @@ def add_room_argument(parser) -> None:
     g = parser.add_argument_group("a DXF floor plan (--room R.dxf)")
     g.add_argument("--room-height", type=float, metavar="M", help="the room's height, m")
     g.add_argument(
-        "--dxf-unit", choices=("m", "cm", "mm"), default="m", help="the drawing's unit (m)"
+        "--dxf-unit",
+        choices=tuple(UNITS),
+        default=None,
+        help="the drawing's unit (default: the one its header declares, $INSUNITS, else m)",
     )
     g.add_argument(
         "--dxf-layer", default="room", help="layer of the outline's closed polyline (room)"
@@ -71,7 +74,7 @@ def load_room(path: str | None, args=None) -> Room:
             return room_from_dxf(
                 path,
                 height,
-                unit=getattr(args, "dxf_unit", "m"),
+                unit=getattr(args, "dxf_unit", None),
                 layer=getattr(args, "dxf_layer", "room"),
                 obstacle_height=getattr(args, "obstacle_height", None),
             )

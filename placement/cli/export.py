@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from placement.cli.common import load_plan, output_file
 from simulation import checks
+from simulation.dxf import UNITS
 
 
 def register(sub) -> None:
@@ -17,7 +18,7 @@ def register(sub) -> None:
     )
     p.add_argument("result_dir", metavar="RESULT_DIR", help="folder with result.json")
     p.add_argument("--dxf", metavar="FILE.dxf", required=True, help="the DXF file to write")
-    p.add_argument("--unit", choices=("m", "cm", "mm"), default="m", help="drawing unit (m)")
+    p.add_argument("--unit", choices=tuple(UNITS), default="m", help="drawing unit (m)")
     p.set_defaults(func=run)
 
 

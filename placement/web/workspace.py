@@ -120,7 +120,7 @@ class Workspace:
         opts = {
             "room_height": None,
             "obstacle_height": None,
-            "dxf_unit": "m",
+            "dxf_unit": None,
             "dxf_layer": "room",
             **options,
         }
@@ -132,11 +132,11 @@ class Workspace:
             argv += [
                 "--room-height",
                 repr(opts["room_height"]),
-                "--dxf-unit",
-                opts["dxf_unit"],
                 "--dxf-layer",
                 opts["dxf_layer"],
             ]
+            if opts["dxf_unit"] is not None:
+                argv += ["--dxf-unit", opts["dxf_unit"]]
             if opts["obstacle_height"] is not None:
                 argv += ["--obstacle-height", repr(opts["obstacle_height"])]
         shift = None  # where a DXF's outline does not start at its origin, the move
