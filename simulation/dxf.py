@@ -64,19 +64,25 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
+def _names(layer: str) -> set[str]:
+    """The layer names of ``layer``, one or several separated by commas, in lower case."""
+    return {n.strip().lower() for n in layer.split(",") if n.strip()}
+
+
 def _entities(doc, types: tuple[str, ...] | None, layer: str):
     """The entities of the drawing's model space of the DXF ``types`` (None: all) on ``layer``
-    (case-insensitive), those inside block references (INSERTs: a column or a desk drawn
-    once and placed many times) included, placed as the references place them (ezdxf's
-    virtual entities). An entity of a block on layer "0" is on its reference's layer, as
-    CAD programs draw it."""
+    (case-insensitive; several layers separated by commas), those inside block references
+    (INSERTs: a column or a desk drawn once and placed many times) included, placed as the
+    references place them (ezdxf's virtual entities). An entity of a block on layer "0" is
+    on its reference's layer, as CAD programs draw it."""
+    names = _names(layer)
 
     def walk(entities, ref_layer):
         for e in entities:
             on = e.dxf.layer if ref_layer is None or e.dxf.layer != "0" else ref_layer
             if e.dxftype() == "INSERT":
                 yield from walk(e.virtual_entities(), on)
-            elif (types is None or e.dxftype() in types) and on.lower() == layer.lower():
+            elif (types is None or e.dxftype() in types) and on.lower() in names:
                 yield e
 
     return walk(doc.modelspace(), None)
@@ -220,17 +226,23 @@ def _read(path, layer, unit, obstacle_layer):
             "sources to simulate)", path, layer, ARC_TOLERANCE, len(corners),
         )  # fmt: skip
     origin = corners.min(axis=0)
-    footprints = _footprints(doc, obstacle_layer, scale, origin, path)
+    footprints = _footprints(doc, obstacle_layer, scale, origin, path, layer)
     labels = _labels(doc, obstacle_layer, scale, origin, footprints)
     return corners - origin, footprints, labels, origin
 
 
-def _footprints(doc, layer, scale, origin, path) -> list[np.ndarray]:
+def _footprints(doc, layer, scale, origin, path, outline) -> list[np.ndarray]:
     """The obstacles' footprints (2, 2) m (lowest, highest x and y, from the room's
     ``origin``) on ``layer``: its closed axis-aligned rectangles (polylines or lines; any
     other closed shape: a ValueError), then its circles (a round column) as the squares
     that hold them, with a warning; entities of other kinds there are left out with a
-    warning naming them."""
+    warning naming them. Where nothing is on ``layer`` but the drawing has layers besides
+    the ``outline``'s, a warning names them (the obstacles may be there)."""
+    drawn = {e.dxf.layer for e in doc.modelspace()}
+    others = sorted(n for n in drawn if n.lower() not in _names(outline) | {"0", "defpoints"})
+    if others and next(_entities(doc, None, layer), None) is None:
+        logger.warning("%s: nothing on layer %r, so no obstacles: are they on %s?", path, layer,
+                       ", ".join(map(repr, others)))  # fmt: skip
     footprints = []
     blocks = _polylines(doc, layer, scale) + _line_loops(doc, layer, scale, path, strict=False)
     for k, (pts, closed, _) in enumerate(blocks):
@@ -271,7 +283,7 @@ def _labels(doc, layer, scale, origin, footprints) -> list[tuple[str, float, flo
     ``layer`` at its first corner (:func:`write_plan`'s label), or None."""
     texts = []
     for e in doc.modelspace().query("TEXT"):
-        m = LABEL.match(e.dxf.text.strip()) if e.dxf.layer.lower() == layer.lower() else None
+        m = LABEL.match(e.dxf.text.strip()) if e.dxf.layer.lower() in _names(layer) else None
         if m is not None:
             at = np.array([e.dxf.insert.x, e.dxf.insert.y]) * scale - origin
             texts.append((at, m["name"], float(m["z0"]), float(m["z1"])))

@@ -230,6 +230,37 @@ def test_a_round_column_is_its_square_and_what_is_not_read_is_said(tmp_path, cap
     assert "left out on layer 'obstacles': 1 HATCH, 1 SPLINE" in caplog.text
 
 
+def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path, caplog, capsys):
+    """Columns on "A-COLS" and a machine on "EQUIPMENT", nothing on "obstacles": the reader
+    says where they may be; named (several layers, by the command line's flag too), both
+    are read; an outline alone (no other layer) gets no such warning."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (8, 0), (8, 6), (0, 6)], close=True, dxfattribs={"layer": "walls"})
+    msp.add_lwpolyline([(2, 2), (2.4, 2), (2.4, 2.4), (2, 2.4)], close=True,
+                       dxfattribs={"layer": "A-COLS"})  # fmt: skip
+    msp.add_lwpolyline([(5, 3), (6, 3), (6, 4), (5, 4)], close=True,
+                       dxfattribs={"layer": "EQUIPMENT"})  # fmt: skip
+    path = tmp_path / "layers.dxf"
+    doc.saveas(path)
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        assert not room_from_dxf(path, 3.0, layer="walls").obstacles
+    assert "nothing on layer 'obstacles', so no obstacles: are they on 'A-COLS', 'EQUIPMENT'?" \
+        in caplog.text  # fmt: skip
+    room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="a-cols, Equipment",
+                         obstacle_height=2.0)  # fmt: skip
+    assert len(room.obstacles) == 2
+    argv = ["bounds", "--room", str(path), "--room-height", "3", "--dxf-layer", "walls",
+            "--dxf-obstacle-layer", "A-COLS,EQUIPMENT", "--obstacle-height", "2"]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    caplog.clear()
+    alone = _drawing(tmp_path / "alone.dxf", [("room", L_CORNERS, True)])
+    with caplog.at_level("WARNING", logger="simulation.dxf"):
+        room_from_dxf(alone, 3.0)
+    assert not caplog.records
+
+
 def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
     """A door's swing drawn as a line on the outline's layer beside the closed polyline, and
     a stray line on the obstacles' layer beside a rectangle: the polylines are read, the

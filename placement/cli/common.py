@@ -53,6 +53,12 @@ def add_room_argument(parser) -> None:
         "--dxf-layer", default="room", help="layer of the outline's closed polyline (room)"
     )
     g.add_argument(
+        "--dxf-obstacle-layer",
+        default="obstacles",
+        metavar="LAYERS",
+        help="layer(s) of the obstacles' rectangles and circles, separated by commas (obstacles)",
+    )
+    g.add_argument(
         "--obstacle-height",
         type=float,
         metavar="M",
@@ -76,12 +82,14 @@ def load_room(path: str | None, args=None) -> Room:
                 height,
                 unit=getattr(args, "dxf_unit", None),
                 layer=getattr(args, "dxf_layer", "room"),
+                obstacle_layer=getattr(args, "dxf_obstacle_layer", "obstacles"),
                 obstacle_height=getattr(args, "obstacle_height", None),
             )
         except ValueError as exc:
             key, _, text = str(exc).partition(":")
             flag = {"height": "--room-height", "layer": "--dxf-layer", "unit": "--dxf-unit",
-                    "obstacle_height": "--obstacle-height"}.get(key)  # fmt: skip
+                    "obstacle_height": "--obstacle-height",
+                    "obstacle_layer": "--dxf-obstacle-layer"}.get(key)  # fmt: skip
             raise ValueError(f"{flag}: {text.strip()}" if flag else str(exc)) from None
     return Room.from_toml(path)
 

@@ -75,6 +75,7 @@ def run(args) -> int:
         "obstacle_height": args.obstacle_height,
         "dxf_unit": args.dxf_unit,
         "dxf_layer": args.dxf_layer,
+        "dxf_obstacle_layer": args.dxf_obstacle_layer,
     }
     ws = Workspace(
         work, args.room, args.result, options, args.system, args.workers, max_plans=args.plans

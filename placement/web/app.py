@@ -65,7 +65,13 @@ def _room_routes(app: FastAPI, ws: Workspace) -> None:
     def room(body: JSONBody):
         options = {
             k: body[k]
-            for k in ("room_height", "obstacle_height", "dxf_unit", "dxf_layer")
+            for k in (
+                "room_height",
+                "obstacle_height",
+                "dxf_unit",
+                "dxf_layer",
+                "dxf_obstacle_layer",
+            )
             if body.get(k) not in (None, "")
         }
         for key in ("room_height", "obstacle_height"):

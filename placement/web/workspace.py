@@ -114,7 +114,8 @@ class Workspace:
     # -- the room, the system, the layout ---------------------------------------------------
     def set_room(self, path, options: dict, system: str | None = None) -> None:
         """Load the room of ``path`` (None: the embedded techtile room) with the DXF
-        ``options`` (room_height, obstacle_height, dxf_unit, dxf_layer)."""
+        ``options`` (room_height, obstacle_height, dxf_unit, dxf_layer,
+        dxf_obstacle_layer)."""
         from types import SimpleNamespace
 
         opts = {
@@ -122,6 +123,7 @@ class Workspace:
             "obstacle_height": None,
             "dxf_unit": None,
             "dxf_layer": "room",
+            "dxf_obstacle_layer": "obstacles",
             **options,
         }
         with _warnings("simulation.dxf") as notes:
@@ -134,6 +136,8 @@ class Workspace:
                 repr(opts["room_height"]),
                 "--dxf-layer",
                 opts["dxf_layer"],
+                "--dxf-obstacle-layer",
+                opts["dxf_obstacle_layer"],
             ]
             if opts["dxf_unit"] is not None:
                 argv += ["--dxf-unit", opts["dxf_unit"]]
