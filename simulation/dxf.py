@@ -193,7 +193,7 @@ def read_floor_plan(
     ``path`` (module docstring), shifted to the outline's origin. ValueError naming the
     file and layer for a missing layer, no outline, an open or a second outline, or an
     obstacle that is not an axis-aligned rectangle."""
-    corners, footprints, _, _ = _read(path, layer, unit, obstacle_layer)
+    corners, footprints, *_ = _read(path, layer, unit, obstacle_layer)
     return corners, footprints
 
 
@@ -226,23 +226,32 @@ def _read(path, layer, unit, obstacle_layer):
             "sources to simulate)", path, layer, ARC_TOLERANCE, len(corners),
         )  # fmt: skip
     origin = corners.min(axis=0)
-    footprints = _footprints(doc, obstacle_layer, scale, origin, path, layer)
+    _say_missing(doc, obstacle_layer, path, layer)
+    footprints, owners = [], []
+    for name in dict.fromkeys(n.strip() for n in obstacle_layer.split(",") if n.strip()):
+        found = _footprints(doc, name, scale, origin, path)
+        footprints += found
+        owners += [name] * len(found)
     labels = _labels(doc, obstacle_layer, scale, origin, footprints)
-    return corners - origin, footprints, labels, origin
+    return corners - origin, footprints, labels, origin, owners
 
 
-def _footprints(doc, layer, scale, origin, path, outline) -> list[np.ndarray]:
-    """The obstacles' footprints (2, 2) m (lowest, highest x and y, from the room's
-    ``origin``) on ``layer``: its closed axis-aligned rectangles (polylines or lines; any
-    other closed shape: a ValueError), then its circles (a round column) as the squares
-    that hold them, with a warning; entities of other kinds there are left out with a
-    warning naming them. Where nothing is on ``layer`` but the drawing has layers besides
-    the ``outline``'s, a warning names them (the obstacles may be there)."""
+def _say_missing(doc, layer, path, outline) -> None:
+    """A warning where nothing is on the obstacles' ``layer`` but the drawing has layers
+    besides the ``outline``'s: it names them (the obstacles may be there)."""
     drawn = {e.dxf.layer for e in doc.modelspace()}
     others = sorted(n for n in drawn if n.lower() not in _names(outline) | {"0", "defpoints"})
     if others and next(_entities(doc, None, layer), None) is None:
         logger.warning("%s: nothing on layer %r, so no obstacles: are they on %s?", path, layer,
                        ", ".join(map(repr, others)))  # fmt: skip
+
+
+def _footprints(doc, layer, scale, origin, path) -> list[np.ndarray]:
+    """The obstacles' footprints (2, 2) m (lowest, highest x and y, from the room's
+    ``origin``) on ``layer``: its closed axis-aligned rectangles (polylines or lines; any
+    other closed shape: a ValueError), then its circles (a round column) as the squares
+    that hold them, with a warning; entities of other kinds there are left out with a
+    warning naming them."""
     footprints = []
     blocks = _polylines(doc, layer, scale) + _line_loops(doc, layer, scale, path, strict=False)
     for k, (pts, closed, _) in enumerate(blocks):
@@ -338,28 +347,22 @@ def room_from_dxf(
     layer: str = "room",
     unit: str | None = None,
     obstacle_layer: str = "obstacles",
-    obstacle_height: float | None = None,
+    obstacle_height: float | dict[str, float] | None = None,
     **kw,
 ):
     """The room of the DXF floor plan ``path`` (module docstring): ``height`` m high, its
     obstacles as their labels give them or, unlabelled, from the floor to
-    ``obstacle_height`` m (needed when the layer has any such); every other keyword is a
-    :class:`~simulation.room.Room` field."""
+    ``obstacle_height`` m (needed when a layer has any such; a dict gives it per layer of
+    ``obstacle_layer``, by name); every other keyword is a :class:`~simulation.room.Room`
+    field."""
     h = checks.real("height", height, low=SIZE_RANGE[0], high=SIZE_RANGE[1], unit="m")
-    corners, footprints, labels, origin = _read(path, layer, unit, obstacle_layer)
+    corners, footprints, labels, origin, owners = _read(path, layer, unit, obstacle_layer)
     obstacles = list(kw.pop("obstacles", None) or [])
-    unlabelled = sum(lab is None for lab in labels)
-    if unlabelled and obstacle_height is None:
-        raise ValueError(
-            f"obstacle_height: layer {obstacle_layer!r} of {path} has {unlabelled} "
-            "obstacle(s) without a height label ('NAME z Z0-Z1 m' at a corner): give their "
-            "height in m"
-        )
-    if obstacle_height is not None:
-        oh = checks.real("obstacle_height", obstacle_height, low=0.0, high=h, low_open=True)
-    for k, ((lo, hi), lab) in enumerate(zip(footprints, labels, strict=True)):
+    tops = _heights(obstacle_height, [o for o, lab in zip(owners, labels, strict=True)
+                                      if lab is None], h, path)  # fmt: skip
+    for k, ((lo, hi), lab, owner) in enumerate(zip(footprints, labels, owners, strict=True)):
         if lab is None:
-            lab = (f"obstacle-{k}", 0.0, oh)
+            lab = (f"obstacle-{k}", 0.0, tops[owner.lower()])
         obstacles.append({"min": [lo[0], lo[1], lab[1]], "max": [hi[0], hi[1], lab[2]],
                           "name": lab[0]})  # fmt: skip
     kw.setdefault("name", Path(str(path)).stem)
@@ -371,6 +374,26 @@ def room_from_dxf(
     if rectangle:
         return Room(size=(float(size[0]), float(size[1]), h), obstacles=obstacles, **kw)
     return Room.from_corners(corners, h, obstacles=obstacles, **kw)
+
+
+def _heights(obstacle_height, unlabelled: list[str], h: float, path) -> dict[str, float]:
+    """The height (m) of the unlabelled obstacles by their layer (lower case), from
+    ``obstacle_height`` (one height for all, or a dict by layer name); a ValueError naming
+    a layer whose unlabelled obstacles get none, or a height not in (0, h]."""
+    given = obstacle_height if isinstance(obstacle_height, dict) else {
+        o: obstacle_height for o in unlabelled}  # fmt: skip
+    given = {str(k).lower(): v for k, v in given.items()}
+    tops = {}
+    for owner in dict.fromkeys(unlabelled):
+        if given.get(owner.lower()) is None:
+            raise ValueError(
+                f"obstacle_height: layer {owner!r} of {path} has {unlabelled.count(owner)} "
+                "obstacle(s) without a height label ('NAME z Z0-Z1 m' at a corner): give "
+                "their height in m"
+            )
+        tops[owner.lower()] = checks.real("obstacle_height", given[owner.lower()], low=0.0,
+                                          high=h, low_open=True)  # fmt: skip
+    return tops
 
 
 def _label(name: str, z0: float, z1: float) -> str:

@@ -249,11 +249,21 @@ def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path,
         in caplog.text  # fmt: skip
     room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="a-cols, Equipment",
                          obstacle_height=2.0)  # fmt: skip
-    assert len(room.obstacles) == 2
+    assert [o.hi[2] for o in room.obstacles] == [2.0, 2.0]
+    # a height per layer: the column to the slab, the machine 1.5 m; a layer without one
+    # is refused by name
+    room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
+                         obstacle_height={"a-cols": 3.0, "EQUIPMENT": 1.5})  # fmt: skip
+    assert [(o.lo[0], o.hi[2]) for o in room.obstacles] == [(2.0, 3.0), (5.0, 1.5)]
+    with pytest.raises(ValueError, match="obstacle_height: layer 'EQUIPMENT' of .* has 1 "):
+        room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
+                      obstacle_height={"A-COLS": 3.0})  # fmt: skip
     argv = ["bounds", "--room", str(path), "--room-height", "3", "--dxf-layer", "walls",
-            "--dxf-obstacle-layer", "A-COLS,EQUIPMENT", "--obstacle-height", "2"]  # fmt: skip
-    assert main(argv) == 0
+            "--dxf-obstacle-layer", "A-COLS,EQUIPMENT"]  # fmt: skip
+    assert main([*argv, "--obstacle-height", "A-COLS=3,EQUIPMENT=1.5"]) == 0
     capsys.readouterr()
+    assert main([*argv, "--obstacle-height", "A-COLS=tall"]) == 2
+    assert "expected a height in m or LAYER=M pairs" in capsys.readouterr().err
     caplog.clear()
     alone = _drawing(tmp_path / "alone.dxf", [("room", L_CORNERS, True)])
     with caplog.at_level("WARNING", logger="simulation.dxf"):

@@ -31,6 +31,29 @@ __all__ = [
 ]
 
 
+def obstacle_heights(text: str) -> float | dict[str, float]:
+    """``--obstacle-height``: one height in m ("2.5"), or heights by DXF layer
+    ("A-COLS=2.8,A-FURN=0.75")."""
+    import argparse
+
+    try:
+        if "=" not in text:
+            return float(text)
+        pairs = [p.split("=", 1) for p in text.split(",") if p.strip()]
+        return {k.strip(): float(v) for k, v in pairs}
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a height in m or LAYER=M pairs separated by commas, got {text!r}"
+        ) from None
+
+
+def obstacle_height_text(value) -> str:
+    """``--obstacle-height``'s text for a value :func:`obstacle_heights` gave."""
+    if isinstance(value, dict):
+        return ",".join(f"{k}={v!r}" for k, v in value.items())
+    return repr(value)
+
+
 def add_room_argument(parser) -> None:
     """Add ``--room`` (a room TOML file or a DXF floor plan; default: the embedded
     techtile room) and the options of a DXF floor plan."""
@@ -60,9 +83,10 @@ def add_room_argument(parser) -> None:
     )
     g.add_argument(
         "--obstacle-height",
-        type=float,
+        type=obstacle_heights,
         metavar="M",
-        help="height of the obstacles the drawing does not label, m",
+        help="height of the obstacles the drawing does not label, m; or per layer, "
+        "LAYER=M,LAYER=M (A-COLS=2.8,A-FURN=0.75)",
     )
 
 

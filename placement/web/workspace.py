@@ -22,7 +22,13 @@ from typing import Any
 
 import numpy as np
 
-from placement.cli.common import describe_system, json_text, load_room, system_choice
+from placement.cli.common import (
+    describe_system,
+    json_text,
+    load_room,
+    obstacle_height_text,
+    system_choice,
+)
 from placement.surfaces import naive_layout
 from placement.web import jobs, scene
 from simulation.dxf import outline_origin
@@ -142,7 +148,7 @@ class Workspace:
             if opts["dxf_unit"] is not None:
                 argv += ["--dxf-unit", opts["dxf_unit"]]
             if opts["obstacle_height"] is not None:
-                argv += ["--obstacle-height", repr(opts["obstacle_height"])]
+                argv += ["--obstacle-height", obstacle_height_text(opts["obstacle_height"])]
         shift = None  # where a DXF's outline does not start at its origin, the move
         if path is not None and str(path).lower().endswith(".dxf"):
             o = outline_origin(path, layer=opts["dxf_layer"], unit=opts["dxf_unit"])
