@@ -362,7 +362,9 @@ def room_from_dxf(
                                       if lab is None], h, path)  # fmt: skip
     for k, ((lo, hi), lab, owner) in enumerate(zip(footprints, labels, owners, strict=True)):
         if lab is None:
-            lab = (f"obstacle-{k}", 0.0, tops[owner.lower()])
+            # named for its layer where the drawing has its own ("A-COLS-3")
+            stem = "obstacle" if owner.lower() == "obstacles" else owner
+            lab = (f"{stem}-{k}", 0.0, tops[owner.lower()])
         obstacles.append({"min": [lo[0], lo[1], lab[1]], "max": [hi[0], hi[1], lab[2]],
                           "name": lab[0]})  # fmt: skip
     kw.setdefault("name", Path(str(path)).stem)

@@ -254,7 +254,8 @@ def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path,
     # is refused by name
     room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
                          obstacle_height={"a-cols": 3.0, "EQUIPMENT": 1.5})  # fmt: skip
-    assert [(o.lo[0], o.hi[2]) for o in room.obstacles] == [(2.0, 3.0), (5.0, 1.5)]
+    assert [(o.name, o.lo[0], o.hi[2]) for o in room.obstacles] == [
+        ("A-COLS-0", 2.0, 3.0), ("EQUIPMENT-1", 5.0, 1.5)]  # fmt: skip
     with pytest.raises(ValueError, match="obstacle_height: layer 'EQUIPMENT' of .* has 1 "):
         room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
                       obstacle_height={"A-COLS": 3.0})  # fmt: skip
