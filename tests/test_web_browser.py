@@ -256,6 +256,35 @@ def test_what_the_dxf_reader_says_of_a_drawing_is_shown(page, tmp_path):
     assert not page.locator("#room-notes").is_visible()
 
 
+def test_a_drawing_with_its_own_layers_and_heights_per_layer(page, tmp_path):
+    # walls on "A-WALL", a column on "A-COLS", a desk on "A-FURN": the page names the
+    # layers and gives each its height, as the command line's flags do
+    import ezdxf
+
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (8, 0), (8, 6), (0, 6)], close=True, dxfattribs={"layer": "A-WALL"})
+    msp.add_lwpolyline([(2, 2), (2.4, 2), (2.4, 2.4), (2, 2.4)], close=True,
+                       dxfattribs={"layer": "A-COLS"})  # fmt: skip
+    msp.add_lwpolyline([(5, 3), (6.6, 3), (6.6, 3.8), (5, 3.8)], close=True,
+                       dxfattribs={"layer": "A-FURN"})  # fmt: skip
+    doc.saveas(tmp_path / "cad.dxf")
+    page.fill("#room-height", "2.8")
+    page.fill("#dxf-layer", "A-WALL")
+    page.fill("#dxf-obstacle-layer", "A-COLS,A-FURN")
+    page.fill("#obstacle-height", "A-COLS=2.8,A-FURN=0.75")
+    page.set_input_files("#room-upload", str(tmp_path / "cad.dxf"))
+    page.wait_for_function("document.getElementById('room-name').innerText.includes('cad')")
+    labels = sorted(page.locator("#plan .obstacle-label").all_text_contents())
+    assert labels == ["A-COLS-0 2.8 m", "A-FURN-1 0.75 m"]
+    page.fill("#obstacle-height", "A-COLS=tall")  # refused as the command line refuses it
+    page.set_input_files("#room-upload", str(tmp_path / "cad.dxf"))
+    page.wait_for_selector("#error:not([hidden])")
+    assert "--obstacle-height" in page.locator("#error").inner_text()
+    for field in ("#dxf-layer", "#dxf-obstacle-layer", "#obstacle-height"):
+        page.fill(field, "")
+
+
 def test_a_solid_of_several_boxes_is_labelled_once_and_a_zone_kept_in_the_plan(page, tmp_path):
     # an L whose zone box covers the missing corner; a pillar of three boxes meeting face to
     # face and a 0.45 m bench

@@ -9,6 +9,7 @@ never a stack trace.
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -17,6 +18,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
+from placement.cli.common import obstacle_heights
 from placement.web.workspace import EXPORTS, Workspace
 from simulation import checks
 
@@ -60,6 +62,15 @@ def _number(flag: str, value) -> float:
         raise ValueError(f"argument {flag}: invalid float value: {value!r}") from None
 
 
+def _heights(text: str):
+    """The obstacle height typed in the page ("2.5", or "A-COLS=2.8,A-FURN=0.75"), refused
+    as the command line refuses it."""
+    try:
+        return obstacle_heights(text)
+    except argparse.ArgumentTypeError as exc:
+        raise ValueError(f"argument --obstacle-height: {exc}") from None
+
+
 def _room_routes(app: FastAPI, ws: Workspace) -> None:
     @app.post("/api/room")
     def room(body: JSONBody):
@@ -74,9 +85,10 @@ def _room_routes(app: FastAPI, ws: Workspace) -> None:
             )
             if body.get(k) not in (None, "")
         }
-        for key in ("room_height", "obstacle_height"):
-            if key in options:
-                options[key] = _number(f"--{key.replace('_', '-')}", options[key])
+        if "room_height" in options:
+            options["room_height"] = _number("--room-height", options["room_height"])
+        if "obstacle_height" in options:
+            options["obstacle_height"] = _heights(str(options["obstacle_height"]))
         if body.get("upload") is not None:
             up = body["upload"]
             path = ws.upload(str(up.get("name", "")), str(up.get("content", "")))

@@ -474,7 +474,8 @@ function wire() {
     const content = await file.text();
     const value = (id) => document.getElementById(id).value || null;
     await act("POST", "/api/room", { upload: { name: file.name, content }, room_height: value("room-height"),
-      dxf_unit: value("dxf-unit"), obstacle_height: value("obstacle-height") });
+      dxf_unit: value("dxf-unit"), dxf_layer: value("dxf-layer"),
+      dxf_obstacle_layer: value("dxf-obstacle-layer"), obstacle_height: value("obstacle-height") });
     ev.target.value = "";
   });
   document.getElementById("system").addEventListener("change", (ev) =>
