@@ -1,7 +1,8 @@
 """Floor plans in DXF, the CAD format floor plans come in (ezdxf).
 
 **Reading** (:func:`read_floor_plan`, :func:`room_from_dxf`): the room's outline is the closed
-polyline (LWPOLYLINE or POLYLINE), or the LINEs and ARCs joined end to end into one closed
+polyline (LWPOLYLINE or POLYLINE; one whose last point comes back within :data:`GAP` of
+its first closes), or the LINEs, ARCs and open polylines joined end to end into one closed
 loop, on a named layer (default ``room``), the obstacles the closed axis-aligned rectangles
 (polylines or four lines) on another (default ``obstacles``), standing from the floor
 to a given height, or, where a text "NAME z Z0-Z1 m" stands at a rectangle's first corner
@@ -111,17 +112,31 @@ def _polylines(doc, layer: str, scale: float) -> list:
             pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
         else:
             pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
-        if len(pts) > 1 and np.allclose(pts[0], pts[-1]):  # closed by repeating the first
-            pts, closed = pts[:-1], True
+        if len(pts) > 2 and np.hypot(*(pts[0] - pts[-1])) <= GAP / scale:
+            pts, closed = pts[:-1], True  # closed by coming back to its first point
         out.append((_merge_straight(pts, GAP / scale) if closed else pts, closed, arcs))
     return out
 
 
+def _closed(e, scale: float) -> bool:
+    """A polyline closes: flagged closed, or its last point within :data:`GAP` of its first."""
+    if e.dxftype() == "LWPOLYLINE":
+        if e.closed:
+            return True
+        pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
+    else:
+        if e.is_closed:
+            return True
+        pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
+    return len(pts) > 2 and np.hypot(*(pts[0] - pts[-1])) <= GAP / scale
+
+
 def _outlines(doc, layer: str, scale: float, path) -> list:
-    """The room's outlines on ``layer``: its polylines, or where it has none, the closed
-    loops of its lines and arcs (:func:`_line_loops`, every one of them in a loop; lines
-    beside a polyline, a door's swing, are not the outline)."""
-    return _polylines(doc, layer, scale) or _line_loops(doc, layer, scale, path, strict=True)
+    """The room's outlines on ``layer``: its closed polylines, or where it has none, the
+    closed loops of its lines, arcs and open polylines (:func:`_line_loops`, every one of
+    them in a loop; lines beside a closed polyline, a door's swing, are not the outline)."""
+    closed = [p for p in _polylines(doc, layer, scale) if p[1]]
+    return closed or _line_loops(doc, layer, scale, path, strict=True)
 
 
 def _merge_straight(pts: np.ndarray, tol: float) -> np.ndarray:
@@ -136,19 +151,21 @@ def _merge_straight(pts: np.ndarray, tol: float) -> np.ndarray:
     return pts
 
 
-#: (m) LINE and ARC ends closer than this join (a drawing's rounding)
+#: (m) ends of lines, arcs and open polylines closer than this join (a drawing's rounding)
 GAP = 1e-3
 
 
 def _line_loops(doc, layer: str, scale: float, path, strict: bool) -> list:
-    """The closed loops that the LINE and ARC entities on ``layer`` form end to end within
-    :data:`GAP` (a drawing whose walls are single lines), as :func:`_polylines` gives
-    polylines (ezdxf's edgeminer finds the loops). Lines and arcs in no loop: a ValueError
+    """The closed loops that the LINE and ARC entities and the open polylines on ``layer``
+    form end to end within :data:`GAP` (a drawing whose walls are single lines or polylines),
+    as :func:`_polylines` gives polylines (ezdxf's edgeminer finds the loops). Those in no
+    loop: a ValueError
     naming the layer and the file ``path`` (``strict``), else a warning, and they are left
     out."""
     from ezdxf import edgeminer, edgesmith
 
-    entities = list(_entities(doc, ("LINE", "ARC"), layer))
+    entities = [e for e in _entities(doc, ("LINE", "ARC", "LWPOLYLINE", "POLYLINE"), layer)
+                if e.dxftype() in ("LINE", "ARC") or not _closed(e, scale)]  # fmt: skip
     if not entities:
         return []
     gap = GAP / scale  # in drawing units
@@ -171,13 +188,14 @@ def _line_loops(doc, layer: str, scale: float, path, strict: bool) -> list:
         loops.append((_merge_straight(pts, gap), True, arcs))
     if rest and strict:
         raise ValueError(
-            f"layer: {len(rest)} of the {len(edges)} lines and arcs on layer {layer!r} in "
-            f"{path} do not join end to end into closed outlines (a gap over {GAP * 1000:g} mm "
-            "or a stray line); close them or draw each outline as one closed polyline"
+            f"layer: {len(rest)} of the {len(edges)} lines, arcs and open polylines on layer "
+            f"{layer!r} in {path} do not join end to end into closed outlines (a gap over "
+            f"{GAP * 1000:g} mm or a stray line); close them or draw each outline as one "
+            "closed polyline"
         )
     if rest:
-        logger.warning("%s: %d of the %d lines and arcs on layer %r close no box and are left "
-                       "out", path, len(rest), len(edges), layer)  # fmt: skip
+        logger.warning("%s: %d of the %d lines, arcs and open polylines on layer %r close no "
+                       "box and are left out", path, len(rest), len(edges), layer)  # fmt: skip
     return loops
 
 
@@ -212,12 +230,7 @@ def _read(path, layer, unit, obstacle_layer):
     if len(outlines) > 1:
         raise ValueError(f"layer: {len(outlines)} outlines on layer {layer!r} in {path}; "
                          "expected one closed outline")  # fmt: skip
-    corners, closed, arcs = outlines[0]
-    if not closed:
-        raise ValueError(
-            f"layer: the outline on layer {layer!r} in {path} is an open polyline; close it "
-            "(the room is the polygon it encloses)"
-        )
+    corners, _, arcs = outlines[0]  # closed: an open outline is refused by _line_loops
     corners = corners * scale
     if arcs:
         logger.warning(
@@ -253,15 +266,16 @@ def _footprints(doc, layer, scale, origin, path) -> list[np.ndarray]:
     that hold them, with a warning; entities of other kinds there are left out with a
     warning naming them."""
     footprints = []
-    blocks = _polylines(doc, layer, scale) + _line_loops(doc, layer, scale, path, strict=False)
-    for k, (pts, closed, _) in enumerate(blocks):
+    blocks = [p for p in _polylines(doc, layer, scale) if p[1]]
+    blocks += _line_loops(doc, layer, scale, path, strict=False)
+    for k, (pts, _, _) in enumerate(blocks):
         pts = pts * scale - origin
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         on_edges = np.all(
             (np.isclose(pts[:, 0], lo[0]) | np.isclose(pts[:, 0], hi[0]))
             & (np.isclose(pts[:, 1], lo[1]) | np.isclose(pts[:, 1], hi[1]))
         )
-        if not closed or len(pts) != 4 or not on_edges:
+        if len(pts) != 4 or not on_edges:
             raise ValueError(
                 f"obstacle_layer: polyline {k} on layer {layer!r} in {path} is not a "
                 "closed axis-aligned rectangle (obstacles are boxes)"

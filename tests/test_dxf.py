@@ -175,8 +175,8 @@ def test_an_outline_and_obstacles_drawn_as_lines_read_as_polylines(tmp_path):
     for u, v in zip(gap, gap[1:], strict=False):
         doc.modelspace().add_line(u, v, dxfattribs={"layer": "room"})
     doc.saveas(tmp_path / "gap.dxf")
-    with pytest.raises(ValueError, match="layer: 5 of the 5 lines and arcs on layer 'room' in "
-                       f"{tmp_path / 'gap.dxf'} do not join"):  # fmt: skip
+    with pytest.raises(ValueError, match="layer: 5 of the 5 lines, arcs and open polylines on "
+                       f"layer 'room' in {tmp_path / 'gap.dxf'} do not join"):  # fmt: skip
         room_from_dxf(tmp_path / "gap.dxf", 3.0)
 
 
@@ -272,6 +272,27 @@ def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path,
     assert not caplog.records
 
 
+def test_walls_drawn_as_open_polylines_join_and_a_nearly_closed_one_closes(tmp_path):
+    """The L's walls as three open polylines and a line, in any direction (in mm), and an
+    obstacle drawn as one polyline whose last point stops 0.5 mm short of its first: the
+    same room as the closed polylines' drawing."""
+    doc = ezdxf.new("R2010")
+    msp = doc.modelspace()
+    mm = [(x * 1000.0, y * 1000.0) for x, y in L_CORNERS]
+    msp.add_lwpolyline(mm[:3], dxfattribs={"layer": "room"})
+    msp.add_lwpolyline(mm[2:5][::-1], dxfattribs={"layer": "room"})
+    msp.add_lwpolyline(mm[4:], dxfattribs={"layer": "room"})
+    msp.add_line(mm[0], mm[-1], dxfattribs={"layer": "room"})
+    msp.add_lwpolyline([(1000, 1000), (1500, 1000), (1500, 1500), (1000, 1500), (1000, 1000.5)],
+                       dxfattribs={"layer": "obstacles"})  # fmt: skip
+    doc.saveas(tmp_path / "open.dxf")
+    room = room_from_dxf(tmp_path / "open.dxf", 3.0, unit="mm", obstacle_height=2.0)
+    assert {tuple(c) for c in np.round(room.floor_corners, 9)} == {
+        tuple(map(float, c)) for c in L_CORNERS}  # fmt: skip
+    (box,) = room.obstacles
+    np.testing.assert_allclose([box.lo, box.hi], [[1.0, 1.0, 0.0], [1.5, 1.5, 2.0]], atol=1e-9)
+
+
 def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
     """A door's swing drawn as a line on the outline's layer beside the closed polyline, and
     a stray line on the obstacles' layer beside a rectangle: the polylines are read, the
@@ -285,7 +306,9 @@ def test_stray_lines_beside_polylines_are_not_the_outline(tmp_path, caplog):
     with caplog.at_level("WARNING", logger="simulation.dxf"):
         room = room_from_dxf(path, 3.0, obstacle_height=1.0)
     assert np.allclose(room.floor_corners, L_CORNERS) and len(room.obstacles) == 1
-    assert "1 of the 1 lines and arcs on layer 'obstacles' close no box" in caplog.text
+    assert (
+        "1 of the 1 lines, arcs and open polylines on layer 'obstacles' close no box" in caplog.text
+    )
 
 
 @pytest.mark.parametrize(
