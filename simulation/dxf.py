@@ -217,7 +217,8 @@ def read_floor_plan(
 
 def _read(path, layer, unit, obstacle_layer):
     """:func:`read_floor_plan`'s (corners, footprints), each footprint's label
-    (:func:`_labels`) and the drawing's point that became the origin (2,) m."""
+    (:func:`_labels`), the drawing's point that became the origin (2,) m and each
+    footprint's layer (one of the names of ``obstacle_layer``, separated by commas)."""
     doc = _doc(path)
     scale = UNITS[_unit(doc, unit, path)]
     outlines = _outlines(doc, layer, scale, path)
@@ -241,7 +242,10 @@ def _read(path, layer, unit, obstacle_layer):
     origin = corners.min(axis=0)
     _say_missing(doc, obstacle_layer, path, layer)
     footprints, owners = [], []
-    for name in dict.fromkeys(n.strip() for n in obstacle_layer.split(",") if n.strip()):
+    names: dict[str, str] = {}  # each layer once (names are case-insensitive), as first named
+    for n in obstacle_layer.split(","):
+        names.setdefault(n.strip().lower(), n.strip())
+    for name in filter(None, names.values()):
         found = _footprints(doc, name, scale, origin, path)
         footprints += found
         owners += [name] * len(found)

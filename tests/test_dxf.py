@@ -247,8 +247,8 @@ def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path,
         assert not room_from_dxf(path, 3.0, layer="walls").obstacles
     assert "nothing on layer 'obstacles', so no obstacles: are they on 'A-COLS', 'EQUIPMENT'?" \
         in caplog.text  # fmt: skip
-    room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="a-cols, Equipment",
-                         obstacle_height=2.0)  # fmt: skip
+    room = room_from_dxf(path, 3.0, layer="walls", obstacle_layer="a-cols, Equipment,A-COLS",
+                         obstacle_height=2.0)  # fmt: skip  # a layer named twice: read once
     assert [o.hi[2] for o in room.obstacles] == [2.0, 2.0]
     # a height per layer: the column to the slab, the machine 1.5 m; a layer without one
     # is refused by name
