@@ -411,8 +411,12 @@ def _heights(obstacle_height, unlabelled: list[str], h: float, path) -> dict[str
                 "obstacle(s) without a height label ('NAME z Z0-Z1 m' at a corner): give "
                 "their height in m"
             )
-        tops[owner.lower()] = checks.real("obstacle_height", given[owner.lower()], low=0.0,
-                                          high=h, low_open=True)  # fmt: skip
+        try:
+            tops[owner.lower()] = checks.real("obstacle_height", given[owner.lower()], low=0.0,
+                                              high=h, low_open=True)  # fmt: skip
+        except ValueError as exc:  # which layer's height
+            text = str(exc).partition(":")[2].strip()
+            raise ValueError(f"obstacle_height: layer {owner!r}: {text}") from None
     return tops
 
 

@@ -259,6 +259,9 @@ def test_obstacles_on_other_layers_are_pointed_at_and_read_where_named(tmp_path,
     with pytest.raises(ValueError, match="obstacle_height: layer 'EQUIPMENT' of .* has 1 "):
         room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
                       obstacle_height={"A-COLS": 3.0})  # fmt: skip
+    with pytest.raises(ValueError, match=r"obstacle_height: layer 'A-COLS': .* \(0, 3\]"):
+        room_from_dxf(path, 3.0, layer="walls", obstacle_layer="A-COLS,EQUIPMENT",
+                      obstacle_height={"A-COLS": 3.5, "EQUIPMENT": 1.5})  # fmt: skip
     argv = ["bounds", "--room", str(path), "--room-height", "3", "--dxf-layer", "walls",
             "--dxf-obstacle-layer", "A-COLS,EQUIPMENT"]  # fmt: skip
     assert main([*argv, "--obstacle-height", "A-COLS=3,EQUIPMENT=1.5"]) == 0
