@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import logging
 import re
+import weakref
 from pathlib import Path
 
 import numpy as np
@@ -65,28 +66,51 @@ def _doc(path):
         raise ValueError(f"dxf {p}: not a readable DXF file ({exc})") from None
 
 
+def _layers(layer: str) -> list[str]:
+    """The layers ``layer`` names, one or several separated by commas, each once (names
+    are case-insensitive) as first named."""
+    names: dict[str, str] = {}
+    for n in layer.split(","):
+        names.setdefault(n.strip().lower(), n.strip())
+    return [n for n in names.values() if n]
+
+
 def _names(layer: str) -> set[str]:
-    """The layer names of ``layer``, one or several separated by commas, in lower case."""
-    return {n.strip().lower() for n in layer.split(",") if n.strip()}
+    """The layer names of ``layer`` (:func:`_layers`) in lower case."""
+    return {n.lower() for n in _layers(layer)}
 
 
-def _entities(doc, types: tuple[str, ...] | None, layer: str):
+def _entities(doc, types: tuple[str, ...] | None, layer: str) -> list:
     """The entities of the drawing's model space of the DXF ``types`` (None: all) on ``layer``
     (case-insensitive; several layers separated by commas), those inside block references
-    (INSERTs: a column or a desk drawn once and placed many times) included, placed as the
-    references place them (ezdxf's virtual entities). An entity of a block on layer "0" is
-    on its reference's layer, as CAD programs draw it."""
+    included (:func:`_placed`)."""
     names = _names(layer)
+    return [e for e, on in _placed(doc)
+            if (types is None or e.dxftype() in types) and on in names]  # fmt: skip
 
-    def walk(entities, ref_layer):
-        for e in entities:
-            on = e.dxf.layer if ref_layer is None or e.dxf.layer != "0" else ref_layer
-            if e.dxftype() == "INSERT":
-                yield from walk(e.virtual_entities(), on)
-            elif (types is None or e.dxftype() in types) and on.lower() in names:
-                yield e
 
-    return walk(doc.modelspace(), None)
+#: each read drawing's :func:`_placed` entities, computed once per drawing
+_PLACED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _placed(doc) -> list[tuple]:
+    """(entity, its layer in lower case) of every entity of the drawing's model space, those
+    inside block references (INSERTs: a column or a desk drawn once and placed many times)
+    placed as the references place them (ezdxf's virtual entities; the references
+    themselves left out). An entity of a block on layer "0" is on its reference's layer, as
+    CAD programs draw it."""
+    if doc not in _PLACED:
+
+        def walk(entities, ref_layer):
+            for e in entities:
+                on = e.dxf.layer if ref_layer is None or e.dxf.layer != "0" else ref_layer
+                if e.dxftype() == "INSERT":
+                    yield from walk(e.virtual_entities(), on)
+                else:
+                    yield e, on.lower()
+
+        _PLACED[doc] = list(walk(doc.modelspace(), None))
+    return _PLACED[doc]
 
 
 def _polylines(doc, layer: str, scale: float) -> list:
@@ -99,36 +123,37 @@ def _polylines(doc, layer: str, scale: float) -> list:
 
     out = []
     for e in _entities(doc, ("LWPOLYLINE", "POLYLINE"), layer):
-        if e.dxftype() == "LWPOLYLINE":
-            arcs = bool(e.has_arc)
-            closed = bool(e.closed)
-        else:
-            arcs = any(v.dxf.bulge for v in e.vertices)
-            closed = bool(e.is_closed)
+        pts, closed = _vertices(e)
+        arcs = bool(e.has_arc) if e.dxftype() == "LWPOLYLINE" else any(
+            v.dxf.bulge for v in e.vertices)  # fmt: skip
         if arcs:
             flat = ezpath.make_path(e).flattening(ARC_TOLERANCE / scale)
             pts = np.array([(v.x, v.y) for v in flat])
-        elif e.dxftype() == "LWPOLYLINE":
-            pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
-        else:
-            pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
-        if len(pts) > 2 and np.hypot(*(pts[0] - pts[-1])) <= GAP / scale:
-            pts, closed = pts[:-1], True  # closed by coming back to its first point
+        if _comes_back(pts, scale):
+            pts, closed = pts[:-1], True
         out.append((_merge_straight(pts, GAP / scale) if closed else pts, closed, arcs))
     return out
 
 
-def _closed(e, scale: float) -> bool:
-    """A polyline closes: flagged closed, or its last point within :data:`GAP` of its first."""
+def _vertices(e) -> tuple[np.ndarray, bool]:
+    """A polyline's vertices (n, 2) in drawing units and whether it is flagged closed."""
     if e.dxftype() == "LWPOLYLINE":
-        if e.closed:
-            return True
-        pts = np.array([(x, y) for x, y, *_ in e.get_points("xy")], dtype=float)
-    else:
-        if e.is_closed:
-            return True
-        pts = np.array([(v.dxf.location.x, v.dxf.location.y) for v in e.vertices], float)
+        pts = [(x, y) for x, y, *_ in e.get_points("xy")]
+        return np.array(pts, dtype=float).reshape(-1, 2), bool(e.closed)
+    pts = [(v.dxf.location.x, v.dxf.location.y) for v in e.vertices]
+    return np.array(pts, dtype=float).reshape(-1, 2), bool(e.is_closed)
+
+
+def _comes_back(pts: np.ndarray, scale: float) -> bool:
+    """The points (n, 2) in drawing units (``scale`` m each) end within :data:`GAP` of where
+    they start: the polyline closes."""
     return len(pts) > 2 and np.hypot(*(pts[0] - pts[-1])) <= GAP / scale
+
+
+def _closed(e, scale: float) -> bool:
+    """A polyline closes: flagged closed, or it comes back to its first point."""
+    pts, flagged = _vertices(e)
+    return flagged or _comes_back(pts, scale)
 
 
 def _outlines(doc, layer: str, scale: float, path) -> list:
@@ -242,10 +267,7 @@ def _read(path, layer, unit, obstacle_layer):
     origin = corners.min(axis=0)
     _say_missing(doc, obstacle_layer, path, layer)
     footprints, owners = [], []
-    names: dict[str, str] = {}  # each layer once (names are case-insensitive), as first named
-    for n in obstacle_layer.split(","):
-        names.setdefault(n.strip().lower(), n.strip())
-    for name in filter(None, names.values()):
+    for name in _layers(obstacle_layer):
         found = _footprints(doc, name, scale, origin, path)
         footprints += found
         owners += [name] * len(found)
@@ -258,7 +280,7 @@ def _say_missing(doc, layer, path, outline) -> None:
     besides the ``outline``'s: it names them (the obstacles may be there)."""
     drawn = {e.dxf.layer for e in doc.modelspace()}
     others = sorted(n for n in drawn if n.lower() not in _names(outline) | {"0", "defpoints"})
-    if others and next(_entities(doc, None, layer), None) is None:
+    if others and not _entities(doc, None, layer):
         logger.warning("%s: nothing on layer %r, so no obstacles: are they on %s?", path, layer,
                        ", ".join(map(repr, others)))  # fmt: skip
 
@@ -285,7 +307,7 @@ def _footprints(doc, layer, scale, origin, path) -> list[np.ndarray]:
                 "closed axis-aligned rectangle (obstacles are boxes)"
             )
         footprints.append(np.array([lo, hi]))
-    circles = list(_entities(doc, ("CIRCLE",), layer))
+    circles = _entities(doc, ("CIRCLE",), layer)
     for c in circles:
         centre = np.array([c.dxf.center.x, c.dxf.center.y]) * scale - origin
         footprints.append(np.array([centre - c.dxf.radius * scale, centre + c.dxf.radius * scale]))

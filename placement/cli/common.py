@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 from typing import Any
@@ -34,8 +35,6 @@ __all__ = [
 def obstacle_heights(text: str) -> float | dict[str, float]:
     """``--obstacle-height``: one height in m ("2.5"), or heights by DXF layer
     ("A-COLS=2.8,A-FURN=0.75")."""
-    import argparse
-
     try:
         if "=" not in text:
             return float(text)
