@@ -41,6 +41,7 @@ from simulation.robust import (
     UNVERIFIED,
     VERIFIED,
     bias_scales,
+    proved_echoes,
     robust_rows,
     thresholds,
 )
@@ -77,7 +78,8 @@ class PositionFix:
 
     x : (..., P, 3) estimates in metres. converged : (..., P) bool. status : (..., P) int
     (see :data:`STATUS_MESSAGES`). nit : (..., P) iterations used. cost : (..., P)
-    F(x) = ½ Σ residual² in m² over the anchors used. start : (..., P, 3) starting points.
+    F(x) = ½ Σ residual² in m² over the anchors used. start : (..., P, 3) starting points
+    (the robust method's: of its first fit, without the ranges proved echoes).
     used : (..., P, M) bool, the anchors each fix rests on (the heard ones; the robust
     method's consistent ones). quality : (..., P) int, :data:`simulation.robust.QUALITY`
     (least squares verifies nothing: its fixes are unverified).
@@ -225,13 +227,14 @@ def locate(
     lead = rho.shape[:-1]
     R = rho.reshape(-1, M)
     layouts = a.reshape(-1, M, 3)
-    fix, start, (owner, lo, hi), heard = _least_squares(
-        layouts, R, region, x0, lead, bounded, int(max_iter), tols, poly
+    echo_sigma = range_sigma if method == "robust" else None
+    fix, start, (owner, lo, hi), heard, F = _least_squares(
+        layouts, R, region, x0, lead, bounded, int(max_iter), tols, poly, echo_sigma
     )
     x, cost, status, nit = fix
     used, quality = heard, np.where(status < 0, NO_FIX, UNVERIFIED).astype(np.int8)
     if method == "robust":
-        used, quality = _robust(layouts, owner, R, fix, lo, hi, bounded, poly, int(max_iter),
+        used, quality = _robust(layouts, owner, R, F, fix, lo, hi, bounded, poly, int(max_iter),
                                 tols, test, room_map, _front(room, layouts))  # fmt: skip
     converged = _converged(status, max_iter)
     if not full_output:
@@ -239,22 +242,28 @@ def locate(
     return _position_fix(lead, x, converged, status, nit, cost, start, used, quality)
 
 
-def _least_squares(layouts, R, region, x0, lead, bounded, max_iter, tols, poly):
+def _least_squares(layouts, R, region, x0, lead, bounded, max_iter, tols, poly, echo_sigma):
     """The least-squares fixes of the rows R (N, M) of ``layouts`` (L, M, 3) (module
-    docstring; the arguments as :func:`locate` checked them): ((x (N, 3), cost, status,
-    nit), the starting points (N, 3), (owner, lo, hi) the rows' layouts and search boxes,
-    heard (N, M))."""
+    docstring; the arguments as :func:`locate` checked them), solved on the ranges F: R,
+    or for the robust method (``echo_sigma``, its range σ, not None) R without its proved
+    echoes (:func:`simulation.robust.proved_echoes`; the search boxes and whether a node
+    can be fixed still follow every heard range). Returns ((x (N, 3), cost, status, nit),
+    the starting points (N, 3), (owner, lo, hi) the rows' layouts and search boxes, heard
+    (N, M), F (N, M))."""
     owner, lo, hi = _rows(layouts, len(R), region)
     svd = _centred_svd(layouts)
     heard = ~np.isnan(R)
     partial = ~np.all(heard, axis=1)
-    x, lo, hi = _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded)
+    F = R
+    if echo_sigma is not None and len(R):
+        F = proved_echoes(_c(layouts), _c(owner, np.int64), _c(R), float(echo_sigma))
+    x, lo, hi = _starting_points(layouts, R, F, owner, lo, hi, region, x0, lead, svd, bounded)
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
-        layouts, owner, R, x, lo, hi, bounded, max_iter, tols, poly
+        layouts, owner, F, x, lo, hi, bounded, max_iter, tols, poly
     )
     _mark_undetermined(layouts, owner, svd, heard, partial, x, cost, status)
-    return (x, cost, status, nit), start, (owner, lo, hi), heard
+    return (x, cost, status, nit), start, (owner, lo, hi), heard, F
 
 
 def _converged(status: np.ndarray, max_iter: int) -> np.ndarray:
@@ -295,15 +304,18 @@ def _position_fix(lead, x, converged, status, nit, cost, start, used, quality) -
     )
 
 
-def _starting_points(layouts, R, owner, lo, hi, region, x0, lead, svd, heard, bounded):
-    """(starts (N, 3), lo, hi): the start of every node (module docstring), its search box
-    narrowed to the anchors it heard when some are missing, clipped to it when ``bounded``."""
+def _starting_points(layouts, R, F, owner, lo, hi, region, x0, lead, svd, bounded):
+    """(starts (N, 3), lo, hi): the start of every node from its ranges F (module
+    docstring), its search box narrowed to the anchors it heard (in R) when some are
+    missing, clipped to it when ``bounded``."""
+    heard = ~np.isnan(R)
     partial = ~np.all(heard, axis=1)
     if np.any(partial):
         lo, hi = _heard_bounds(layouts, owner, heard, partial, lo, hi, region)
-    x = _start(layouts, R, owner, lo, hi, x0, lead, svd)
-    if np.any(partial) and x0 is None:
-        _masked_starts(layouts, _c(owner, np.int64), _c(R), _c(lo), _c(hi), _c(partial), x)
+    x = _start(layouts, F, owner, lo, hi, x0, lead, svd)
+    gaps = partial if F is R else np.any(np.isnan(F), axis=1)
+    if np.any(gaps) and x0 is None:
+        _masked_starts(layouts, _c(owner, np.int64), _c(F), _c(lo), _c(hi), _c(gaps), x)
     if bounded:
         x = np.clip(x, lo, hi)
     return x, lo, hi
@@ -468,8 +480,9 @@ def check_test(range_sigma, false_alarm, alert_limit) -> None:
     checks.real("alert_limit", alert_limit, low=0.0, high=100.0, low_open=True, unit="m")
 
 
-def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_map, front):
-    """In place on the least-squares ``fix`` (x, cost, status, nit): the robust method's
+def _robust(a, owner, R, F, fix, lo, hi, bounded, poly, max_iter, tols, test, room_map, front):
+    """In place on the least-squares ``fix`` (x, cost, status, nit) of the ranges F
+    (:func:`_least_squares`) of the rows R: the robust method's
     fixes (:mod:`simulation.robust`) with the test ``test`` (range_sigma, false_alarm,
     alert_limit) on the map ``room_map`` (:func:`simulation.polyhedral.blocking_map`;
     ``front`` (L, M, F) the faces each anchor faces); returns the anchors used (B, M) and
@@ -479,7 +492,7 @@ def _robust(a, owner, R, fix, lo, hi, bounded, poly, max_iter, tols, test, room_
     used, quality = np.zeros((B, M), dtype=bool), np.zeros(B, dtype=np.int8)
     if B:
         x, cost, status, nit = fix
-        robust_rows(_c(a), _c(owner, np.int64), _c(R), x, cost, status, nit,
+        robust_rows(_c(a), _c(owner, np.int64), _c(R), _c(F), x, cost, status, nit,
                     _c(np.broadcast_to(lo, (B, 3))), _c(np.broadcast_to(hi, (B, 3))),
                     bool(bounded), poly, max_iter, *(float(t) for t in tols), float(sigma),
                     thresholds(false_alarm, M), bias_scales(false_alarm, M), alert_limit, used,

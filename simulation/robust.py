@@ -7,15 +7,21 @@ the anchors that do see the tag agree with each other to the receiver's range σ
 the residual test of Chan et al. (IEEE TVT 2006), solved greedily as in least-median
 schemes (Casas et al., 2006):
 
-1. solve least squares on every heard anchor (:mod:`simulation.least_squares`);
+1. solve least squares on every heard anchor (:mod:`simulation.least_squares`) but those
+   whose range is proved an echo (:func:`proved_echoes`: an echo only lengthens a range,
+   so r_j − r_k − |a_j − a_k| bounds the excess of range j over its distance from below
+   for every heard k; above :data:`PROVED` it is no direct range), where 5 or more
+   remain: the dropping steps would leave them out one at a time; the later steps still
+   see every range;
 2. test the normalized residual T = Σ r_j² / σ² against the χ² quantile with n − 3
    degrees of freedom at the false-alarm probability α (n heard anchors, σ the range σ of
    the receiver);
 3. while the test fails and more than 4 anchors remain, drop one: the two anchors with the
    largest deleted residuals r_j² / (1 − h_jj) (h_jj the leverage of anchor j in the
-   linearized fit) are each left out and the position solved again from the current one
-   (at most :data:`SUBSET_ITER` iterations); the one whose removal leaves the smaller T is
-   dropped;
+   linearized fit) are each left out in that order and the position solved again from
+   the current one (at most :data:`SUBSET_ITER` iterations); the first whose removal
+   passes the test is dropped (the second is then not solved), else the one whose removal
+   leaves the smaller T;
    when the test passes but the room's map (below) hides some of the anchors kept from
    the fix (a range bent round an obstacle's edge can be only centimetres long, so the
    test passes with it), those anchors are left out and the fix solved again
@@ -27,8 +33,7 @@ schemes (Casas et al., 2006):
    (below), search for consensus as RANSAC does (Fischler and Bolles, 1981),
    deterministically: minimal sets of 4 heard anchors, in the order of their ranges (a
    near anchor is more often in sight) except that a range proved an echo comes after
-   all the others (an echo only lengthens a range, so r_j − r_k − |a_j − a_k| is a lower
-   bound of range j's excess for every heard k: above :data:`SHORT` it is an echo), each
+   all the others (its excess bounded as in step 1 above :data:`SHORT`), each
    solved from the linear solution of its squared-range differences; a hypothesis is
    scored by its contradictions (ranges shorter than its distance by more than
    :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one better than the best
@@ -113,6 +118,10 @@ SHORT = (0.1, 3.0)
 #: (m) an anchor hides a position only if it hides every point this close to it along the
 #: axes: a fix is centimetres off, and a direct path may graze an obstacle's edge
 GRAZE = 0.05
+#: (m, range σs): a range whose proved excess (:func:`proved_echoes`) is above the larger of
+#: the two is left out before the first fit (four times :data:`SHORT`: an anchor mounted a
+#: few centimetres off the plan, or a noisy range, proves nothing)
+PROVED = (0.4, 12.0)
 #: the anchors that surely see a position with a range longer than its distance (their
 #: direct path missed) before each further one contradicts it (on a room's map)
 MISSES = 2
@@ -172,6 +181,7 @@ def robust_rows(
     a,
     owner,
     R,
+    F,
     xs,
     costs,
     status,
@@ -193,8 +203,10 @@ def robust_rows(
     geo,
     front,
 ):  # pragma: no cover - compiled
-    """Steps 2–5 of the module docstring for every row whose least-squares fix is in xs
-    (B, 3), costs (B,), status (B,) (rows with status < 0 have no fix and are left); the
+    """Steps 2–5 of the module docstring for every row of ranges R (B, M) whose
+    least-squares fix on the ranges F (B, M) (R without its proved echoes,
+    :func:`proved_echoes`) is in xs (B, 3), costs (B,), status (B,) (rows with status < 0
+    have no fix and are left); the
     anchors kept are written into used (B, M) and the quality into quality (B,) (``bias``
     (M + 1,) :func:`bias_scales`, ``alert`` the alert limit in m); ``geo``
     the room's map (:func:`simulation.polyhedral.blocking_map`; empty: nothing hides an
@@ -216,7 +228,9 @@ def robust_rows(
             continue
         ab = a[owner[b]]
         gr = row_map(geo, front[owner[b]])
-        rho[:] = R[b]
+        rho[:] = F[b]
+        for j in range(M):
+            used[b, j] = F[b, j] == F[b, j]
         x[:] = xs[b]
         fst[0] = status[b]
         T, n, iters = _drop_failing(ab, rho, x, 2.0 * costs[b] / (sigma * sigma), nit[b],
@@ -246,6 +260,38 @@ def robust_rows(
 
 
 @numba.njit(cache=True)
+def proved_echoes(a, owner, R, sigma):  # pragma: no cover - compiled
+    """(B, M) the ranges R (B, M) of the layouts a (L, M, 3) (row b's ``owner[b]``) with
+    every range proved an echo left out (NaN) where 5 or more heard ranges remain (enough
+    to test them)
+    (step 1 of the module docstring): an echo only lengthens a range, so
+    r_j − r_k − |a_j − a_k| bounds the excess of range j over its distance from below for
+    every heard k (the triangle inequality); above :data:`PROVED` (``sigma`` the range σ,
+    m), range j is no direct range, and least squares need not be pulled by it first."""
+    B, M = R.shape
+    F = R.copy()
+    proved = max(PROVED[0], PROVED[1] * sigma)
+    echo = np.zeros(M, dtype=np.bool_)
+    for b in range(B):
+        ab, n, m = a[owner[b]], 0, 0
+        for j in range(M):
+            echo[j] = False
+            if R[b, j] != R[b, j]:
+                continue
+            n += 1
+            for k in range(M):
+                if R[b, k] == R[b, k] and R[b, j] - R[b, k] - _distance(ab[j], ab[k]) > proved:
+                    echo[j] = True
+                    m += 1
+                    break
+        if m and n - m >= 5:
+            for j in range(M):
+                if echo[j]:
+                    F[b, j] = np.nan
+    return F
+
+
+@numba.njit(cache=True)
 def _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                   sigma, thr, used, work, score, trial, xt, xb, fst):  # fmt: skip
     # pragma: no cover - compiled
@@ -260,7 +306,7 @@ def _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, f
     while T > thr[n - 3] and n > 4:
         best_T, best_j, best_st, it = _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi,
                                                 bounded, poly, max_iter, xtol, ftol, gtol,
-                                                sigma, work)  # fmt: skip
+                                                sigma, thr[n - 4], work)  # fmt: skip
         iters += it
         if best_j < 0:
             break
@@ -353,10 +399,12 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
 
 @numba.njit(cache=True)
 def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-              sigma, work):  # fmt: skip  # pragma: no cover - compiled
+              sigma, passes, work):  # fmt: skip  # pragma: no cover - compiled
     """Step 3 of the module docstring once, from the fix x (3,) on the ranges rho (M,): the
     :data:`CANDIDATES` anchors of the largest deleted residuals each left out and solved
-    again (``score``, ``trial``, ``xt``: scratch); returns (T, anchor, status, iterations)
+    again, the largest first, until one leaves a T within ``passes`` (the test's threshold
+    with one anchor fewer) (``score``, ``trial``, ``xt``: scratch); returns (T, anchor,
+    status, iterations)
     of the best, its fix in xb (3,) (anchor −1: none to leave out)."""
     _deleted_residuals(x, ab, rho, score, work[0], work[1])
     best_T, best_j, best_st, iters = math.inf, -1, 0, 0
@@ -374,6 +422,8 @@ def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter,
         if Tj < best_T:
             best_T, best_j, best_st = Tj, j, st
             xb[:] = xt
+        if best_T <= passes:  # the test passes without it: the next candidates are not tried
+            break
     return best_T, best_j, best_st, iters
 
 

@@ -474,6 +474,47 @@ def test_a_range_longer_than_another_by_more_than_their_anchors_distance_is_trie
     assert np.argsort(_order_key(anchors, ranges, 0.1)).tolist() == [1, 2, 0, 3]
 
 
+def test_ranges_proved_echoes_are_left_out_before_the_first_fit():
+    """proved_echoes against the triangle inequality in numpy: range j goes where
+    r_j − r_k − |a_j − a_k| exceeds PROVED (0.4 m or 12σ) for some heard k, and only
+    where 5 or more heard ranges remain."""
+    from simulation.robust import PROVED, proved_echoes
+
+    rng = np.random.default_rng(7)
+    x = _nodes(rng, 300)
+    R = np.linalg.norm(x[:, None] - ANCHORS[None], axis=-1) + SIGMA * rng.standard_normal((300, 8))
+    R += np.where(rng.random((300, 8)) < 0.25, rng.uniform(0.0, 4.0, (300, 8)), 0.0)
+    R[rng.random((300, 8)) < 0.05] = np.nan
+    for sigma in (SIGMA, 0.1):
+        F = proved_echoes(ANCHORS[None], np.zeros(300, np.int64), R, sigma)
+        D = np.linalg.norm(ANCHORS[:, None] - ANCHORS[None], axis=-1)
+        bound = R[:, :, None] - R[:, None, :] - D[None]
+        excess = np.max(np.where(np.isnan(bound), -np.inf, bound), axis=2)
+        echo = excess > max(PROVED[0], PROVED[1] * sigma)
+        keep = np.isfinite(R).sum(axis=1) - echo.sum(axis=1) >= 5
+        want = np.where(echo & keep[:, None], np.nan, R)
+        np.testing.assert_array_equal(F, want)
+        assert 0 < np.sum(np.isnan(F) & np.isfinite(R)) < np.sum(np.isfinite(R))
+
+
+def test_a_proved_echo_does_not_pull_the_first_fit():
+    """A range 5 m too long, proved an echo by a nearer anchor's range, is left out of the
+    least squares the robust search starts from: the start is the linear solution of the
+    other seven (exact here), the echo's anchor is not used, the fix is the node's and
+    verified; least squares on every range is metres off."""
+    x = np.array([2.0, 1.5, 1.1])
+    rho = np.linalg.norm(x - ANCHORS, axis=1)
+    rho[2] += 5.0
+    fix = locate(ANCHORS, rho[None], method="robust", region=REGION, bounded=True,
+                 range_sigma=SIGMA, full_output=True)  # fmt: skip
+    np.testing.assert_allclose(fix.start[0], x, atol=1e-9)
+    assert not fix.used[0, 2] and fix.used[0].sum() == 7
+    np.testing.assert_allclose(fix.x[0], x, atol=1e-9)
+    assert fix.quality[0] == VERIFIED
+    ls = locate(ANCHORS, rho[None], region=REGION, bounded=True)
+    assert np.linalg.norm(ls[0] - x) > 0.3
+
+
 def test_the_map_check_vouches_only_for_fixes_that_see_their_anchors():
     from simulation.map_check import map_check
 
