@@ -257,7 +257,8 @@ def _least_squares(layouts, R, region, x0, lead, bounded, max_iter, tols, poly, 
     F = R
     if echo_sigma is not None and len(R):
         F = proved_echoes(_c(layouts), _c(owner, np.int64), _c(R), float(echo_sigma))
-    x, lo, hi = _starting_points(layouts, R, F, owner, lo, hi, region, x0, lead, svd, bounded)
+    x, lo, hi = _starting_points(layouts, F, heard, partial, owner, lo, hi, region, x0, lead,
+                                 svd, bounded)  # fmt: skip
     start = x.copy()
     x, cost, status, nit = _levenberg_marquardt(
         layouts, owner, F, x, lo, hi, bounded, max_iter, tols, poly
@@ -304,16 +305,15 @@ def _position_fix(lead, x, converged, status, nit, cost, start, used, quality) -
     )
 
 
-def _starting_points(layouts, R, F, owner, lo, hi, region, x0, lead, svd, bounded):
+def _starting_points(layouts, F, heard, partial, owner, lo, hi, region, x0, lead, svd, bounded):
     """(starts (N, 3), lo, hi): the start of every node from its ranges F (module
-    docstring), its search box narrowed to the anchors it heard (in R) when some are
-    missing, clipped to it when ``bounded``."""
-    heard = ~np.isnan(R)
-    partial = ~np.all(heard, axis=1)
+    docstring), its search box narrowed to the anchors it heard (``heard`` (N, M), the
+    nodes ``partial`` (N,) that missed some) when some are missing, clipped to it when
+    ``bounded``."""
     if np.any(partial):
         lo, hi = _heard_bounds(layouts, owner, heard, partial, lo, hi, region)
     x = _start(layouts, F, owner, lo, hi, x0, lead, svd)
-    gaps = partial if F is R else np.any(np.isnan(F), axis=1)
+    gaps = np.any(np.isnan(F), axis=1)  # partial, or the proved echoes left out
     if np.any(gaps) and x0 is None:
         _masked_starts(layouts, _c(owner, np.int64), _c(F), _c(lo), _c(hi), _c(gaps), x)
     if bounded:

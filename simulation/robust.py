@@ -221,9 +221,9 @@ def robust_rows(
     drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
     loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
     for b in range(R.shape[0]):
-        for j in range(M):
-            used[b, j] = R[b, j] == R[b, j]
         if status[b] < 0:
+            for j in range(M):
+                used[b, j] = R[b, j] == R[b, j]
             quality[b] = NO_FIX
             continue
         ab = a[owner[b]]
@@ -273,17 +273,11 @@ def proved_echoes(a, owner, R, sigma):  # pragma: no cover - compiled
     proved = max(PROVED[0], PROVED[1] * sigma)
     echo = np.zeros(M, dtype=np.bool_)
     for b in range(B):
-        ab, n, m = a[owner[b]], 0, 0
+        ab, rho, n, m = a[owner[b]], R[b], 0, 0
         for j in range(M):
-            echo[j] = False
-            if R[b, j] != R[b, j]:
-                continue
-            n += 1
-            for k in range(M):
-                if R[b, k] == R[b, k] and R[b, j] - R[b, k] - _distance(ab[j], ab[k]) > proved:
-                    echo[j] = True
-                    m += 1
-                    break
+            echo[j] = rho[j] == rho[j] and _proved_echo(ab, rho, j, proved)
+            n += rho[j] == rho[j]
+            m += echo[j]
         if m and n - m >= 5:
             for j in range(M):
                 if echo[j]:
@@ -536,10 +530,9 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
 
 @numba.njit(cache=True)
 def _order_key(ab, rho0, short):  # pragma: no cover - compiled
-    """(M,) the order of the anchors in the minimal sets: their ranges, those certainly
-    echoes after all the others (inf for the unheard). An echo only lengthens a range, so
-    r_j − r_k − |a_j − a_k| is a lower bound of the excess of range j over its distance
-    for every heard k (the triangle inequality); above ``short`` m, range j is an echo."""
+    """(M,) the order of the anchors in the minimal sets: their ranges, those proved
+    echoes by more than ``short`` m (:func:`_proved_echo`) after all the others (inf for
+    the unheard)."""
     M = rho0.shape[0]
     key = np.full(M, np.inf)
     top = 0.0
@@ -550,11 +543,20 @@ def _order_key(ab, rho0, short):  # pragma: no cover - compiled
         if rho0[j] != rho0[j]:
             continue
         key[j] = rho0[j]
-        for k in range(M):
-            if rho0[k] == rho0[k] and rho0[j] - rho0[k] - _distance(ab[j], ab[k]) > short:
-                key[j] += top + 1.0  # after every range not known to be an echo
-                break
+        if _proved_echo(ab, rho0, j, short):
+            key[j] += top + 1.0  # after every range not known to be an echo
     return key
+
+
+@numba.njit(cache=True)
+def _proved_echo(ab, rho, j, margin) -> bool:  # pragma: no cover - compiled
+    """Whether the heard range rho[j] is proved an echo: an echo only lengthens a range, so
+    r_j − r_k − |a_j − a_k| bounds its excess over the distance from below for every heard
+    k (the triangle inequality); true when that bound exceeds ``margin`` (m) for some k."""
+    for k in range(rho.shape[0]):
+        if rho[k] == rho[k] and rho[j] - rho[k] - _distance(ab[j], ab[k]) > margin:
+            return True
+    return False
 
 
 @numba.njit(cache=True, inline="always")

@@ -493,7 +493,10 @@ def test_ranges_proved_echoes_are_left_out_before_the_first_fit():
         echo = excess > max(PROVED[0], PROVED[1] * sigma)
         keep = np.isfinite(R).sum(axis=1) - echo.sum(axis=1) >= 5
         want = np.where(echo & keep[:, None], np.nan, R)
-        np.testing.assert_array_equal(F, want)
+        # a bound within rounding of the margin may fall either way (compiled norm)
+        sure = np.all(np.abs(excess - max(PROVED[0], PROVED[1] * sigma)) > 1e-9, axis=1)
+        assert sure.sum() > 290
+        np.testing.assert_array_equal(F[sure], want[sure])
         assert 0 < np.sum(np.isnan(F) & np.isfinite(R)) < np.sum(np.isfinite(R))
 
 
