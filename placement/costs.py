@@ -8,6 +8,7 @@ simulation.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
 from collections.abc import Callable
@@ -16,8 +17,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
-from placement.coverage import CoverageTarget, constrain
-from placement.rangetable import check_mount_tolerance, range_table, sight_counts, table_errors
+from placement.coverage import CoverageTarget
+from placement.rangetable import (
+    check_mount_tolerance,
+    kept_to_target,
+    range_table,
+    shadowed_statistics,
+    table_errors,
+)
 from simulation import checks, degeneracy
 from simulation.room import Room, as_room
 from simulation.statistics import STATISTICS
@@ -148,10 +155,10 @@ class DrawsCost:
             return math.inf
         table = self._table(anchors)
         layout = np.arange(len(table.candidates))[None]
-        cost = SIMULATED_STATISTICS[self.statistic](table_errors(table, layout)[0])
-        if self.coverage_target is None:
-            return cost
-        return float(constrain([cost], sight_counts(table, layout), self.coverage_target)[0])
+        table = dataclasses.replace(table, coverage_target=self.coverage_target)
+        e = table_errors(table, layout)
+        cost = shadowed_statistics(table, layout, self.statistic, e)
+        return float(kept_to_target(table, layout, cost)[0])
 
 
 @dataclass(frozen=True)

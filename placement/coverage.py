@@ -88,16 +88,24 @@ def plane_groups(room, candidates) -> list[np.ndarray]:
 class CoverageTarget:
     """A requirement on the layouts of a search: at least ``share`` of the nodes see ``k``
     anchors in line of sight and reach (:func:`visibility`, at the exact nodes of the
-    table's first draw). A layout below it costs more than any that meets it
+    table's first draw); a layout below it costs more than any that meets it
     (:func:`constrain`): the search keeps to the layouts that meet it, as a constrained
-    swarm ranks the feasible first (Deb's rule)."""
+    swarm ranks the feasible first (Deb's rule). With ``shadow_error`` E > 0 (m), the
+    share h of the table's sight points (:func:`placement.rangetable.sight_points`) that
+    see fewer than ``sight_k`` anchors counts as tags fixed E m off
+    (:func:`simulation.statistics.mixed_statistic`): the shadow of a column between the
+    nodes costs what its tags' fixes on echoes cost."""
 
     k: int
     share: float
+    sight_k: int = K_FIX
+    shadow_error: float = 0.0
 
     def __post_init__(self) -> None:
         checks.count("k", self.k, low=1, high=10_000)
         checks.real("share", self.share, low=0.0, high=1.0)
+        checks.count("sight_k", self.sight_k, low=1, high=10_000)
+        checks.real("shadow_error", self.shadow_error, low=0.0, unit="m")
 
     def needed(self, P: int) -> int:
         """The nodes of P that must be covered: ⌈share · P⌉, a product within a tie of
@@ -105,13 +113,20 @@ class CoverageTarget:
         return int(math.ceil(self.share * P - 1e-9))
 
     def to_dict(self) -> dict:
-        return {"k": self.k, "share": self.share}
+        return {"k": self.k, "share": self.share, "sight_k": self.sight_k,
+                "shadow_error": self.shadow_error}  # fmt: skip
+
+    @classmethod
+    def from_dict(cls, d: dict) -> CoverageTarget:
+        """The target of :meth:`to_dict` (one written before the sight points: none there)."""
+        return cls(int(d["k"]), float(d["share"]), int(d.get("sight_k", K_FIX)),
+                   float(d.get("shadow_error", 0.0)))  # fmt: skip
 
 
 def constrain(costs, counts, target: CoverageTarget | None) -> np.ndarray:
     """(L,) the costs (L,) of layouts whose nodes see ``counts`` (L, P) anchors in line of
-    sight and reach, with :data:`BELOW_TARGET_COST` added below ``target`` (None: the
-    costs unchanged)."""
+    sight and reach, with :data:`BELOW_TARGET_COST` added below ``target`` (None: the costs
+    unchanged)."""
     costs = np.asarray(costs, dtype=float)
     if target is None:
         return costs

@@ -432,10 +432,11 @@ class Planner:
     @property
     def coverage_target(self) -> CoverageTarget | None:
         """The coverage target the search kept to (``search.min_coverage`` where M anchors
-        can reach it, :func:`placement.simselect.coverage_target`), which the swarm, the
+        can reach it, and the shadow error of a robust system,
+        :func:`placement.simselect.coverage_target`), which the swarm, the
         refinement and the finalists keep to as well; None: none."""
         t = self.search_summary.get("coverage_target")
-        return None if t is None else CoverageTarget(int(t["k"]), float(t["share"]))
+        return None if t is None else CoverageTarget.from_dict(t)
 
     def identity(self) -> dict[str, Any]:
         """What identifies the run for its checkpoint: the room, every setting, the nodes."""

@@ -20,6 +20,11 @@ mounting error of every candidate and its own receiver noise:
 Scored over all draws, a layout is good where the tags will be and as it will be
 mounted, not only at one fixed set of nodes (docs/model.md, "Range tables and scene draws").
 
+A table also knows which of its *sight points* see each candidate (:func:`sight_points`:
+random tag points, many more than the nodes, the same for every table of a room): where a
+column's shadow falls between the nodes, a node set would not see that a layout leaves
+part of the zone with too few anchors in line of sight.
+
 Randomness: draw d's nodes come from ``SeedSequence(seed, spawn_key=(3, d))``; candidate
 j's offset in draw d from ``(2, j, d)`` and its noise from ``(0, j, d)``. The table does
 not depend on chunking or on the executor, and :func:`extend_table` adds columns that
@@ -37,6 +42,7 @@ import numpy as np
 
 from placement.coverage import CoverageTarget, constrain, visibility
 from placement.surfaces import mounting_surfaces, project, surface_index
+from placement.tags import random_nodes
 from placement.workers import run_jobs
 from simulation import checks, degeneracy, streams
 from simulation.receiver import PRECISIONS
@@ -55,8 +61,10 @@ class RangeTable:
     mounted points (m); room the room and system the system simulated (its positioning
     solves the table's fixes); line_of_sight (D, P, N) bool, nothing blocks the direct
     path. seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
-    coverage_target: a :class:`placement.coverage.CoverageTarget` the costs of its layouts
-    enforce (:func:`table_costs`; None: none).
+    sight (Q, N) bool: sight point q (:func:`sight_points`) sees candidate j in line of
+    sight and reach (:func:`sight`). coverage_target: a
+    :class:`placement.coverage.CoverageTarget` the costs of its layouts enforce
+    (:func:`table_costs`; None: none).
     """
 
     candidates: np.ndarray
@@ -70,6 +78,7 @@ class RangeTable:
     mount_tolerance: float
     exact_draws: int
     precision: str
+    sight: np.ndarray
     coverage_target: CoverageTarget | None = None
 
     @property
@@ -110,6 +119,32 @@ def node_region(room: Room, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             lo[rows] = np.maximum(lo[rows], zlo)
             hi[rows] = np.minimum(hi[rows], zhi)
     return lo, hi
+
+
+#: the sight points of a room (:func:`sight_points`)
+SIGHT_POINTS = 2000
+#: the key of the sight points' stream (of seed 0: they depend on the room only)
+SIGHT_STREAM = 12
+
+
+def sight_points(room: Room) -> np.ndarray:
+    """(Q, 3) the room's sight points: :data:`SIGHT_POINTS` uniform random tag points
+    (:func:`placement.tags.random_nodes`) from a stream of the room's own, so that every
+    table and cost of a room counts the same points."""
+    return random_nodes(room, SIGHT_POINTS, streams.stream(0, SIGHT_STREAM))
+
+
+def sight(room: Room, system: System, anchors, points) -> np.ndarray:
+    """(Q, n) bool: point q (points (Q, 3)) sees anchor j (anchors (n, 3)): nothing blocks
+    the direct path, and it lies within the signal's reach and beyond its near limit (as
+    :func:`placement.coverage.visibility`)."""
+    from simulation.polyhedral import line_of_sight
+
+    a = np.asarray(anchors, dtype=float)
+    c = room.speed_of_sound
+    d = np.linalg.norm(points[:, None, :] - a[None], axis=-1)
+    reach = (d >= system.near_limit(c)) & (d <= system.reach(c))
+    return line_of_sight(room, a, points) & reach
 
 
 def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.ndarray:
@@ -273,7 +308,8 @@ def range_table(
     if nodes.ndim == 2:
         nodes = node_draws(room, nodes, draws, spec["exact_draws"], seed)
     ranges, dist, los = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
-    return RangeTable(cand, nodes, ranges, dist, room, line_of_sight=los, **spec)
+    seen = sight(room, spec["system"], cand, sight_points(room))
+    return RangeTable(cand, nodes, ranges, dist, room, line_of_sight=los, sight=seen, **spec)
 
 
 def extend_table(
@@ -304,6 +340,9 @@ def extend_table(
         ranges=np.concatenate([table.ranges, ranges], axis=2),
         distances=np.concatenate([table.distances, dist], axis=2),
         line_of_sight=np.concatenate([table.line_of_sight, los], axis=2),
+        sight=np.concatenate(
+            [table.sight, sight(room, table.system, new, sight_points(room))], axis=1
+        ),  # fmt: skip
     )
 
 
@@ -356,17 +395,37 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     x, fixed = _positions(table, layouts)
     e = _errors(table, x)
     # collinear or coincident anchors leave the position undetermined: never a solution
-    costs = np.where(fixed, row_statistics(statistic, e), math.inf)
+    costs = np.where(fixed, shadowed_statistics(table, layouts, statistic, e), math.inf)
+    return kept_to_target(table, layouts, costs)
+
+
+def shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> np.ndarray:
+    """(L,) the ``statistic`` of each layout's errors (L, n); under a coverage target with a
+    shadow error E, the share of the sight points that see fewer than its ``sight_k``
+    anchors counts as tags fixed E m off (:class:`placement.coverage.CoverageTarget`)."""
+    target = table.coverage_target
+    if target is None or target.shadow_error <= 0:
+        return row_statistics(statistic, errors)
+    h = np.mean(sight_counts(table, layouts, points=True) < target.sight_k, axis=1)
+    return row_statistics(statistic, errors, shadow=(h, target.shadow_error))
+
+
+def kept_to_target(table: RangeTable, layouts, costs) -> np.ndarray:
+    """(L,) the costs (L,) of the layouts (L, M) of candidates with the table's coverage
+    target of the nodes applied (:func:`placement.coverage.constrain`; unchanged without
+    one)."""
     if table.coverage_target is None:
-        return costs
+        return np.asarray(costs, dtype=float)
     return constrain(costs, sight_counts(table, layouts), table.coverage_target)
 
 
-def sight_counts(table: RangeTable, layouts) -> np.ndarray:
+def sight_counts(table: RangeTable, layouts, points: bool = False) -> np.ndarray:
     """(L, P) the anchors of each layout (L, M) of candidates that each node of the table's
-    first draw sees in line of sight and reach (:func:`placement.coverage.visibility`)."""
+    first draw sees in line of sight and reach (:func:`placement.coverage.visibility`);
+    with ``points``, (L, Q): those each sight point sees (:attr:`RangeTable.sight`)."""
     S = _layout_indices(table, layouts)
-    return np.sum(visibility(table, columns=S), axis=-1).T  # the layouts' columns only
+    V = table.sight[:, S] if points else visibility(table, columns=S)
+    return np.sum(V, axis=-1).T  # the layouts' columns only
 
 
 def table_cost(table: RangeTable, indices, statistic: str = "variance") -> float:

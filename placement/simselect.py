@@ -45,6 +45,7 @@ from placement.rangetable import (
     extend_table,
     range_table,
     table_costs,
+    table_errors,
 )
 from placement.result import LayoutResult
 from placement.surfaces import (
@@ -429,8 +430,10 @@ def _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress
     [(S, cost, local, evaluations)] per chain."""
     n = opt.chain_draws or max(1, min(table.exact_draws, 8 // M))
     view = first_draws(table, n)
-    # under a coverage target the other chains start near the first start, which meets it
-    around = starts[0] if starts and table.coverage_target is not None else None
+    # under a target of the nodes' coverage the other chains start near the first start,
+    # which meets it (a shadow error alone is no requirement: they start at random)
+    target = table.coverage_target
+    around = starts[0] if starts and target is not None and target.share > 0 else None
     chains = [
         Chain.start(
             view, M, statistic, opt.random_starts, streams.stream(seed, 10, k), around, nbr
@@ -519,26 +522,54 @@ def simulated_select(
     t1 = time.perf_counter()
     nbr = nearest(table.candidates, opt.neighbours)
     cover = _coverage_start(table, M, opt.coverage_k)
-    target = coverage_target(opt, cover)
+    seen = _sight_start(table, M, opt.coverage_k)
+    shadow = 0.0 if seen is None else shadow_error(table, M, seed)
+    target = coverage_target(opt, cover, shadow)
     table = dataclasses.replace(table, coverage_target=target)
-    starts = () if cover is None else (cover.indices,)
+    starts = tuple(s.indices for s in (cover, seen) if s is not None)
     found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
     sel = _selection(table, statistic, found, nfev, (t0, t1, t2))
-    return dataclasses.replace(sel, coverage=cover, coverage_target=target)
+    return dataclasses.replace(sel, coverage=cover, sight=seen, coverage_target=target)
 
 
-def coverage_target(opt: SearchOptions, cover):
+def coverage_target(opt: SearchOptions, cover, shadow: float = 0.0):
     """The :class:`placement.coverage.CoverageTarget` the search keeps to: ``opt.min_coverage``
-    with the coverage selection's k where the selection ``cover`` reaches it (None: no
-    target, or one that M anchors cannot reach, or every node sees every candidate)."""
-    from placement.coverage import CoverageTarget
+    of the nodes with the coverage selection's k where the selection ``cover`` reaches it,
+    and the sight points' ``shadow`` error (m, :func:`shadow_error`; 0: none); None:
+    neither (no target, or one that M anchors cannot reach, or every node sees every
+    candidate, and no shadow)."""
+    from placement.coverage import K_FIX, CoverageTarget
 
     share = opt.min_coverage or 0.0
     if share <= 0 or cover is None or not ties.reaches(cover.covered, share):
+        share = 0.0
+    if share <= 0 and shadow <= 0:
         return None
-    return CoverageTarget(cover.k, share)
+    return CoverageTarget(cover.k if cover else K_FIX, share, K_FIX, shadow)
+
+
+#: the random layouts whose fixes in the shadows measure the shadow error
+SHADOW_LAYOUTS = 30
+
+
+def shadow_error(table: RangeTable, M: int, seed: int) -> float:
+    """(m) the RMS error of the fixes, at the table's exact nodes, of the nodes that see
+    fewer than 4 anchors in line of sight and reach, over :data:`SHADOW_LAYOUTS` random
+    layouts of M candidates (the stream (13,) of ``seed``): what a tag in a shadow gets in
+    this room with this system. 0 where no such node has a fix."""
+    from placement.coverage import K_FIX, visibility
+
+    rng = streams.stream(seed, 13)
+    N = len(table.candidates)
+    layouts = np.stack([np.sort(rng.choice(N, M, replace=False)) for _ in range(SHADOW_LAYOUTS)])
+    view = first_draws(table, max(table.exact_draws, 1))
+    e = table_errors(view, layouts).reshape(len(layouts), view.draws, -1)  # (L, D, P)
+    counts = np.stack([np.sum(visibility(view, d, layouts), axis=-1).T for d in range(view.draws)],
+                      axis=1)  # fmt: skip  # (L, D, P)
+    shadowed = e[(counts < K_FIX) & np.isfinite(e)]
+    return float(np.sqrt(np.mean(shadowed**2))) if shadowed.size else 0.0
 
 
 def _coverage_start(table, M: int, k: int):
@@ -552,6 +583,21 @@ def _coverage_start(table, M: int, k: int):
         return None
     groups = plane_groups(table.room, table.candidates)
     return select_coverage(V, M, min(k, M), groups=groups)
+
+
+def _sight_start(table, M: int, k: int):
+    """The sight selection: the M of the table's candidates that make the most sight points
+    (:func:`placement.rangetable.sight_points`) see 4 anchors in line of sight and reach,
+    where the positioning rejects echoes (a robust fix needs 4 direct ranges: a tag that
+    sees fewer is fixed on an echo, metres off) and some point does not see every
+    candidate; else (or with ``k`` 0, coverage off) None. It starts the second chain."""
+    from placement.coverage import K_FIX, plane_groups, select_coverage
+
+    V = table.sight
+    if k == 0 or table.system.positioning.method != "robust" or bool(np.all(V)):
+        return None
+    groups = plane_groups(table.room, table.candidates)
+    return select_coverage(V, M, min(K_FIX, M), groups=groups)
 
 
 def _indices(table: RangeTable, anchors: np.ndarray) -> np.ndarray:
@@ -646,8 +692,9 @@ class SimulatedSelection(LayoutResult):
     scored on the table; table_windows the received windows simulated; timings in
     seconds; status a code of :data:`SELECTION_STATUS`; coverage the coverage selection
     that started the first chain (:class:`placement.coverage.CoverageSelection`, None
-    where every node sees every candidate); coverage_target the target every layout was
-    kept to (:func:`coverage_target`; None: none).
+    where every node sees every candidate); sight the sight selection that started
+    another (:func:`_sight_start`; None: none); coverage_target the target every layout
+    was kept to (:func:`coverage_target`; None: none).
     """
 
     FUN: ClassVar[str] = "cost"
@@ -667,6 +714,7 @@ class SimulatedSelection(LayoutResult):
     message: str = ""
     table: RangeTable | None = field(default=None, repr=False)
     coverage: Any = None
+    sight: Any = None
     coverage_target: Any = None
 
     def layouts(self, k: int | None = None) -> np.ndarray:
@@ -689,6 +737,7 @@ class SimulatedSelection(LayoutResult):
             "message": self.message,
             "fun": self.cost,
             **({} if self.coverage is None else {"coverage": self.coverage.to_dict()}),
+            **({} if self.sight is None else {"sight": self.sight.to_dict()}),
             **({} if self.coverage_target is None
                else {"coverage_target": self.coverage_target.to_dict()}),
         }  # fmt: skip

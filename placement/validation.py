@@ -35,6 +35,7 @@ from analysis.coverage import covered_share
 from analysis.fim import DEFAULT_SIGMA, peb
 from placement.coverage import K_LINE_OF_SIGHT, coverage_k
 from placement.rangetable import check_mount_tolerance, mounted_points
+from placement.tags import random_nodes
 from placement.workers import run_calls
 from simulation import checks, streams
 from simulation.robust import VERIFIED
@@ -290,37 +291,6 @@ def held_out_grid(room: Room) -> np.ndarray:
 
     finer = dataclasses.replace(room, zone_spacing=0.8 * room.zone_spacing)
     return finer.grid()
-
-
-def random_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
-    """(n, 3) uniform random points in the node region: the room less its node margin, or
-    the tag zones (chosen in proportion to their volume) within it; in a polygonal room or
-    one with obstacles, inside the floor plan and outside the obstacles."""
-    if room.is_shoebox and not room.obstacles:
-        return _uniform_nodes(room, n, rng)
-    # a polygonal room or obstacles: draw until n points lie in the room (rejection)
-    margin = max(room.node_margin - 1e-9, 0.0)
-    out = np.empty((0, 3))
-    while len(out) < n:
-        p = _uniform_nodes(room, 2 * (n - len(out)) + 8, rng)
-        out = np.concatenate([out, p[room.contains(p, margin=margin)]])
-    return out[:n]
-
-
-def _uniform_nodes(room: Room, n: int, rng: np.random.Generator) -> np.ndarray:
-    """(n, 3) uniform points in the node region of the bounding box, or in its zones."""
-    lo = np.full(3, room.node_margin)
-    hi = np.asarray(room.size) - room.node_margin
-    if not room.zones:
-        return rng.uniform(lo, hi, (n, 3))
-    boxes = [(np.maximum(lo, z0), np.minimum(hi, z1)) for z0, z1 in room.zones]
-    vol = np.array([np.prod(np.maximum(b - a, 0)) for a, b in boxes])
-    pick = rng.choice(len(boxes), n, p=vol / vol.sum() if vol.sum() > 0 else None)
-    out = np.empty((n, 3))
-    for k, (a, b) in enumerate(boxes):
-        rows = pick == k
-        out[rows] = rng.uniform(a, b, (int(rows.sum()), 3))
-    return out
 
 
 def _evaluate(room, system, anchors, nodes, realizations, seed, precision):

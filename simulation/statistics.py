@@ -155,12 +155,13 @@ def penalty_text(cost) -> str | None:
     return f"{100 * (cost / NO_FIX_COST - 1):.2g} % without a fix"
 
 
-def row_statistics(name: str, errors) -> np.ndarray:
+def row_statistics(name: str, errors, shadow=None) -> np.ndarray:
     """(L,) the cost statistic ``name`` of :data:`STATISTICS` of each row of errors (L, n)
     at once: row l's value equals ``STATISTICS[name](errors[l])``. A row without a NaN
     (no-fix) gets the statistic; a row with some gets :data:`NO_FIX_COST` · (1 + their
     share) + the statistic of its finite errors (0 if none); a row with a ±inf error, or
-    rows without errors, get +inf."""
+    rows without errors, get +inf. ``shadow`` (h (L,), E): row l's errors stand for the
+    share 1 − h[l] of the tags, the others' errors are E m (:func:`mixed_statistic`)."""
     checks.choice("statistic", name, tuple(_REDUCTIONS))
     e = np.asarray(errors, dtype=float)
     if e.ndim != 2:
@@ -171,6 +172,10 @@ def row_statistics(name: str, errors) -> np.ndarray:
     ok = np.all(np.isfinite(e), axis=1)
     if np.any(ok):
         out[ok] = _REDUCTIONS[name](e[ok], axis=1)
+    if shadow is not None:
+        h, E = shadow
+        for i in np.flatnonzero(ok & (np.asarray(h) > 0)):  # layouts, not nodes: few
+            out[i] = mixed_statistic(name, e[i], float(h[i]), float(E))
     nofix = np.isnan(e)
     partial = ~ok & ~np.any(np.isinf(e), axis=1)  # only NaN among the non-finite
     for i in np.flatnonzero(partial):  # layouts, not nodes: few
@@ -178,6 +183,29 @@ def row_statistics(name: str, errors) -> np.ndarray:
         stat = float(_REDUCTIONS[name](fixes)) if fixes.size else 0.0
         out[i] = NO_FIX_COST * (1.0 + nofix[i].mean()) + stat
     return out
+
+
+def mixed_statistic(name: str, errors, h: float, E: float) -> float:
+    """The statistic ``name`` of the errors of a mixture: the share 1 − h of the tags with
+    the errors (n,) (each 1/n of it), the share h with the error E (m): for the mean
+    (1 − h)·ē + h·E, for the RMS √((1 − h)·mean(e²) + h·E²), for the variance its second
+    moment less the squared mean, for the P95 the mixture's 95th percentile."""
+    e = np.asarray(errors, dtype=float)
+    m1 = (1 - h) * np.mean(e) + h * E
+    m2 = (1 - h) * np.mean(e * e) + h * E * E
+    if name == "mean":
+        return float(m1)
+    if name == "rms":
+        return float(np.sqrt(m2))
+    if name == "variance":
+        return float(max(m2 - m1 * m1, 0.0))
+    q = PERCENTILE / 100  # the mixture's CDF (1 − h)·F(x) + h·[x ≥ E] first reaches q
+    below = (1 - h) * np.mean(e < E)
+    if below >= q:
+        return float(np.percentile(e, 100 * q / (1 - h)))
+    if below + h >= q:
+        return float(E)
+    return float(np.percentile(e, 100 * (q - h) / (1 - h)))
 
 
 #: the unit of a cost by its name: the statistics above and the mean PEB ("peb", m)

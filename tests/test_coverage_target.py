@@ -9,7 +9,13 @@ import pytest
 
 from placement.costs import DrawsCost
 from placement.coverage import BELOW_TARGET_COST, CoverageTarget, constrain, visibility
-from placement.rangetable import node_draws, range_table, sight_counts, table_costs
+from placement.rangetable import (
+    node_draws,
+    range_table,
+    sight_counts,
+    table_costs,
+    table_errors,
+)
 from placement.simselect import SearchOptions, simulated_select
 from placement.surfaces import candidate_grid
 from simulation import Room
@@ -95,7 +101,8 @@ def test_the_search_keeps_to_a_target_it_can_reach_and_ignores_one_it_cannot(tab
     opts = SearchOptions(**{**SEARCH.__dict__, "min_coverage": reach})
     kept = simulated_select(ROOM, M, statistic="rms", options=opts, table=table, rng=2)
     assert kept.coverage_target == CoverageTarget(5, reach)
-    assert kept.to_dict()["coverage_target"] == {"k": 5, "share": reach}
+    assert kept.to_dict()["coverage_target"] == {"k": 5, "share": reach, "sight_k": 4,
+                                                 "shadow_error": 0.0}  # fmt: skip
     meets = [np.mean(sight_counts(table, S[None])[0] >= 5) >= reach - 1e-12 for S, _ in kept.optima]
     costs = [cost for _, cost in kept.optima]
     assert meets[0] and np.array_equal(kept.indices, kept.optima[0][0])
@@ -161,3 +168,98 @@ def test_a_plan_keeps_every_phase_to_the_target_and_says_so():
     chosen = range_table(ROOM, res.anchors, NODES, draws=1, exact_draws=1, chunk=5)
     assert np.mean(np.sum(visibility(chosen), axis=1) >= 5) >= share - 1e-12
     assert res.cost < BELOW_TARGET_COST and planner.refined
+
+
+def _slab_hits(p, a, lo, hi):
+    """(Q, n) bool: the segment from each point p (Q, 3) to each anchor a (n, 3) enters the
+    open box (lo, hi): the slab test, in numpy."""
+    d = a[None] - p[:, None]  # (Q, n, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (lo - p[:, None]) / d, (hi - p[:, None]) / d
+    enter = np.nanmax(np.where(d == 0, -np.inf, np.minimum(t0, t1)), axis=-1)
+    leave = np.nanmin(np.where(d == 0, np.inf, np.maximum(t0, t1)), axis=-1)
+    parallel_out = np.any((d == 0) & ((p[:, None] <= lo) | (p[:, None] >= hi)), axis=-1)
+    return (enter < leave) & (leave > 0) & (enter < 1) & ~parallel_out
+
+
+def test_the_sight_points_see_what_the_slab_test_says(table):
+    """The table's sight (Q, N): the cabinet blocks a sight point's direct path to a
+    candidate exactly where the segment enters the box (numpy slab test), everything else
+    in reach is seen; the points are the room's (the same for every table), in the room and
+    outside the cabinet; a grown table's sight is the bigger table's."""
+    from placement.rangetable import SIGHT_POINTS, extend_table, sight_points
+
+    pts = sight_points(ROOM)
+    assert pts.shape == (SIGHT_POINTS, 3) and np.all(ROOM.contains(pts))
+    np.testing.assert_array_equal(pts, sight_points(ROOM))
+    ((lo, hi),) = [(np.array(o.lo), np.array(o.hi)) for o in ROOM.obstacles]
+    blocked = _slab_hits(pts, CAND, lo, hi)
+    assert table.sight.shape == (SIGHT_POINTS, len(CAND)) and 0.05 < blocked.mean() < 0.6
+    np.testing.assert_array_equal(table.sight, ~blocked)  # all within reach in this room
+    half = range_table(ROOM, CAND[:7], NODES, draws=1, exact_draws=1, rng=3)
+    grown = extend_table(ROOM, half, CAND[7:])
+    np.testing.assert_array_equal(grown.sight, table.sight)
+
+
+@pytest.mark.parametrize("name", ["mean", "rms", "variance", "p95"])
+@pytest.mark.parametrize("E", [0.05, 2.0])
+def test_the_mixed_statistic_is_that_of_the_errors_with_the_shadows_tags_added(name, E):
+    """m tags of error E beside n errors: the statistic of the n + m errors, for the share
+    h = m / (n + m) (the P95 within the two order statistics around it)."""
+    from simulation.statistics import STATISTICS, mixed_statistic
+
+    e = np.random.default_rng(5).gamma(2.0, 0.02, 190)
+    m = 10
+    both = np.concatenate([e, np.full(m, E)])
+    got = mixed_statistic(name, e, m / len(both), E)
+    if name == "p95":
+        s = np.sort(both)
+        k = 0.95 * (len(both) - 1)
+        assert s[int(np.floor(k)) - 1] - 1e-12 <= got <= s[int(np.ceil(k)) + 1] + 1e-12
+    else:
+        assert got == pytest.approx(STATISTICS[name](both), rel=1e-12)
+    assert mixed_statistic(name, e, 0.0, E) == pytest.approx(STATISTICS[name](e), rel=1e-12)
+
+
+def test_the_shadows_tags_count_in_the_table_costs(table):
+    """Under a target with a shadow error, a layout's table cost is the statistic of its
+    errors with the share of sight points seeing fewer than its ``sight_k`` anchors at that
+    error; a layout whose every sight point sees them costs what it costs without the target."""
+    from simulation.statistics import mixed_statistic
+
+    rng = np.random.default_rng(4)
+    layouts = np.stack([rng.choice(len(CAND), 5, replace=False) for _ in range(40)])
+    counts = sight_counts(table, layouts, points=True)
+    np.testing.assert_array_equal(counts, table.sight[:, layouts].sum(axis=-1).T)
+    h = np.mean(counts < 2, axis=1)  # 2: some layouts leave no sight point short
+    assert np.any(h == 0) and np.any(h > 0)
+    free = table_costs(table, layouts, "rms")
+    target = CoverageTarget(5, 0.0, sight_k=2, shadow_error=1.5)
+    shaded = table.__class__(**{**table.__dict__, "coverage_target": target})
+    kept = table_costs(shaded, layouts, "rms")
+    np.testing.assert_array_equal(kept[h == 0], free[h == 0])
+    e = table_errors(table, layouts)
+    for i in np.flatnonzero(h > 0)[:5]:
+        assert kept[i] == pytest.approx(mixed_statistic("rms", e[i], h[i], 1.5), rel=1e-12)
+    assert CoverageTarget.from_dict(target.to_dict()) == target
+    assert CoverageTarget.from_dict({"k": 5, "share": 0.5}) == CoverageTarget(5, 0.5)
+
+
+def test_a_robust_search_counts_the_shadows_tags_least_squares_does_not(table):
+    """With positioning that rejects echoes the search counts the tags in the shadows at
+    the error that fixes in shadows have in random layouts, and starts a chain from the
+    sight selection; least squares counts nothing."""
+    from placement.coverage import select_coverage
+    from placement.simselect import shadow_error
+    from simulation import System
+
+    robust = System.preset("recommended")
+    t = range_table(ROOM, CAND, NODES, draws=1, exact_draws=1, rng=3, system=robust)
+    sel = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, table=t, rng=2)
+    E = shadow_error(t, 5, 2)
+    assert E > 0.1  # a fix on an echo: decimetres to metres off
+    assert sel.coverage_target == CoverageTarget(5, 0.0, 4, E)
+    assert sel.sight.covered >= select_coverage(t.sight, 5, 4).covered - 1e-12
+    assert sel.to_dict()["sight"]["covered"] == sel.sight.covered
+    ls = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, table=table, rng=2)
+    assert ls.sight is None and ls.coverage_target is None

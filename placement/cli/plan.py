@@ -305,12 +305,18 @@ def _print_result(res, args) -> None:
     if search.get("resumed"):
         print(f"search: resumed from {args.checkpoint}.search.json")
     cover = search.get("coverage")
-    if cover:
-        print(f"coverage selection: {100 * cover['covered']:.1f} % of the nodes see "
-              f"{cover['k']} anchors in line of sight and reach (bound "
-              f"{100 * cover['bound']:.1f} %, {cover['status']}; greedy "
-              f"{100 * cover['greedy']:.1f} %): the first search chain's start")  # fmt: skip
+    picks = [("coverage", "the nodes", cover), ("sight", "the room's random tag points",
+                                                search.get("sight"))]  # fmt: skip
+    for n, (name, points, sel) in enumerate(p for p in picks if p[2]):
+        print(f"{name} selection: {100 * sel['covered']:.1f} % of {points} see {sel['k']} "
+              f"anchors in line of sight and reach (bound {100 * sel['bound']:.1f} %, "
+              f"{sel['status']}; greedy {100 * sel['greedy']:.1f} %): the "
+              f"{('first', 'second')[n]} search chain's start")  # fmt: skip
     share, target = res.settings.search.min_coverage, search.get("coverage_target")
+    if target and target.get("shadow_error"):
+        print(f"shadows: a tag seeing fewer than {target['sight_k']} anchors in line of sight "
+              f"counts as a fix {target['shadow_error']:.2f} m off (the RMS error of such fixes "
+              "in random layouts)")  # fmt: skip
     if share and target:
         print(f"coverage target: every layout kept to {100 * share:g} % of the nodes seeing "
               f"{target['k']} anchors in line of sight and reach")  # fmt: skip
