@@ -20,9 +20,8 @@ from analysis.fim import DEFAULT_SIGMA, check_sigma, peb
 from placement.coverage import CoverageTarget
 from placement.rangetable import (
     check_mount_tolerance,
-    kept_to_target,
     range_table,
-    shadowed_statistics,
+    table_cost,
     table_errors,
 )
 from simulation import checks, degeneracy
@@ -136,9 +135,10 @@ class DrawsCost:
         return table_errors(self._table(anchors), np.arange(len(anchors))[None])[0]
 
     def _table(self, anchors):
-        """The range table of the layout's M anchors (its M candidates) on the draws."""
+        """The range table of the layout's M anchors (its M candidates) on the draws, under
+        the cost's coverage target."""
         a = np.asarray(anchors, dtype=float)
-        return range_table(
+        table = range_table(
             self.room,
             a,
             self.nodes,
@@ -149,16 +149,12 @@ class DrawsCost:
             precision=self.precision,
             system=self.system,
         )
+        return dataclasses.replace(table, coverage_target=self.coverage_target)
 
     def __call__(self, anchors: np.ndarray, rng: np.random.Generator | None = None) -> float:
         if degeneracy.anchor_rank(anchors) < 2:  # collinear: the position is not determined
             return math.inf
-        table = self._table(anchors)
-        layout = np.arange(len(table.candidates))[None]
-        table = dataclasses.replace(table, coverage_target=self.coverage_target)
-        e = table_errors(table, layout)
-        cost = shadowed_statistics(table, layout, self.statistic, e)
-        return float(kept_to_target(table, layout, cost)[0])
+        return table_cost(self._table(anchors), np.arange(len(anchors)), self.statistic)
 
 
 @dataclass(frozen=True)

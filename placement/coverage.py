@@ -140,10 +140,8 @@ def visibility(table, draw: int = 0, columns=None) -> np.ndarray:
     """(P, N) bool: node p of the table's draw ``draw`` sees candidate j: nothing blocks the
     direct path, and it lies within the signal's reach and beyond its near limit. With
     ``columns`` (an index array of shape S), (P, *S): those candidates only."""
-    c = table.room.speed_of_sound
     cols = slice(None) if columns is None else columns
-    d = table.distances[draw][:, cols]
-    reach = (d >= table.system.near_limit(c)) & (d <= table.system.reach(c))
+    reach = table.system.within_reach(table.distances[draw][:, cols], table.room.speed_of_sound)
     return table.line_of_sight[draw][:, cols] & reach
 
 

@@ -141,10 +141,8 @@ def sight(room: Room, system: System, anchors, points) -> np.ndarray:
     from simulation.polyhedral import line_of_sight
 
     a = np.asarray(anchors, dtype=float)
-    c = room.speed_of_sound
     d = np.linalg.norm(points[:, None, :] - a[None], axis=-1)
-    reach = (d >= system.near_limit(c)) & (d <= system.reach(c))
-    return line_of_sight(room, a, points) & reach
+    return line_of_sight(room, a, points) & system.within_reach(d, room.speed_of_sound)
 
 
 def node_draws(room: Room, nodes, draws: int, exact_draws: int, rng=0) -> np.ndarray:
@@ -395,11 +393,11 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
     x, fixed = _positions(table, layouts)
     e = _errors(table, x)
     # collinear or coincident anchors leave the position undetermined: never a solution
-    costs = np.where(fixed, shadowed_statistics(table, layouts, statistic, e), math.inf)
-    return kept_to_target(table, layouts, costs)
+    costs = np.where(fixed, _shadowed_statistics(table, layouts, statistic, e), math.inf)
+    return _kept_to_target(table, layouts, costs)
 
 
-def shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> np.ndarray:
+def _shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> np.ndarray:
     """(L,) the ``statistic`` of each layout's errors (L, n); under a coverage target with a
     shadow error E, the share of the sight points that see fewer than its ``sight_k``
     anchors counts as tags fixed E m off (:class:`placement.coverage.CoverageTarget`)."""
@@ -410,7 +408,7 @@ def shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> n
     return row_statistics(statistic, errors, shadow=(h, target.shadow_error))
 
 
-def kept_to_target(table: RangeTable, layouts, costs) -> np.ndarray:
+def _kept_to_target(table: RangeTable, layouts, costs) -> np.ndarray:
     """(L,) the costs (L,) of the layouts (L, M) of candidates with the table's coverage
     target of the nodes applied (:func:`placement.coverage.constrain`; unchanged without
     one)."""

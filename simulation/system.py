@@ -238,6 +238,13 @@ class System:
         (0 for the paper's design)."""
         return float(speed_of_sound) * self.delays[0]
 
+    def within_reach(self, distances, speed_of_sound: float):
+        """bool, shaped like ``distances`` (m): the range lies in what the window sees,
+        between :meth:`near_limit` and :meth:`reach` at ``speed_of_sound`` (m/s)."""
+        d = np.asarray(distances)
+        c = float(speed_of_sound)
+        return (d >= self.near_limit(c)) & (d <= self.reach(c))
+
     def check_room(self, room) -> None:
         """Refuse a window that closes after the chirp's end plus the longest flight in
         ``room`` (its diagonal over c): it would hold nothing but noise after that."""

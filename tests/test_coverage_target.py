@@ -249,7 +249,7 @@ def test_a_robust_search_counts_the_shadows_tags_least_squares_does_not(table):
     """With positioning that rejects echoes the search counts the tags in the shadows at
     the error that fixes in shadows have in random layouts, and starts a chain from the
     sight selection; least squares counts nothing."""
-    from placement.coverage import select_coverage
+    from placement.coverage import covered_share, greedy
     from placement.simselect import shadow_error
     from simulation import System
 
@@ -259,7 +259,7 @@ def test_a_robust_search_counts_the_shadows_tags_least_squares_does_not(table):
     E = shadow_error(t, 5, 2)
     assert E > 0.1  # a fix on an echo: decimetres to metres off
     assert sel.coverage_target == CoverageTarget(5, 0.0, 4, E)
-    assert sel.sight.covered >= select_coverage(t.sight, 5, 4).covered - 1e-12
+    assert sel.sight.covered >= covered_share(t.sight, greedy(t.sight, 5, 4), 4) - 1e-12
     assert sel.to_dict()["sight"]["covered"] == sel.sight.covered
     ls = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, table=table, rng=2)
     assert ls.sight is None and ls.coverage_target is None

@@ -7,9 +7,10 @@ import pytest
 from drift import compare
 from killing import run, run_and_kill
 
-#: a small plan with a swarm of three iterations, so that every phase takes a moment
+#: a small plan with a swarm of three iterations, so that every phase takes a moment (the
+#: validation too: a kill 0.3 s after its bar must find it running)
 ARGS = ["plan", "--anchors", "4", "--search-spacing", "1.0", "--search-chains", "2",
-        "--search-evaluations", "300", "--iterations", "3", "--validate-realizations", "5",
+        "--search-evaluations", "300", "--iterations", "3", "--validate-realizations", "30",
         "--workers", "2"]  # fmt: skip
 
 
