@@ -63,6 +63,9 @@ def test_the_reach_is_where_the_window_stops_holding_enough_chirp(signal):
     c = 343.0
     assert signal.reach(c) == pytest.approx(c * hi)
     assert signal.near_limit(c) == pytest.approx(c * lo)
+    ranges = c * np.concatenate([inside, outside])[:, None] * [[1.0, 1.0]]  # any shape
+    expected = np.concatenate([np.ones(len(inside)), np.zeros(len(outside))])[:, None] > 0
+    np.testing.assert_array_equal(signal.within_reach(ranges, c), expected & [[True, True]])
 
 
 def test_the_papers_design_keeps_its_reach_exactly():
