@@ -27,10 +27,10 @@ from _common import emit
 
 from analysis.fim import peb
 from placement.cli.common import system_choice
+from placement.rangetable import sight
 from placement.tags import random_nodes
 from placement.validation import field_errors
 from simulation import Room, streams
-from simulation.polyhedral import line_of_sight
 
 #: the field check's seed, as in bench_against_naive.py
 SEED = 7
@@ -54,8 +54,7 @@ def field_tags(room, system, anchors, draws: int):
     for d in range(draws):
         E = field_errors(room, anchors, TAGS, 0.03, d, SEED, system=system)
         tags = random_nodes(room, TAGS, streams.stream(SEED, 0, d))  # field_errors' tags
-        dist = np.linalg.norm(tags[:, None, :] - anchors[None], axis=-1)
-        seen = line_of_sight(room, anchors, tags) & system.within_reach(dist, room.speed_of_sound)
+        seen = sight(room, system, anchors, tags)  # line of sight and reach
         g = peb(anchors, tags, sigma=np.where(seen, 1.0, np.inf))  # GDOP of the seen
         parts.append((E[0], E[1] > 0, seen.sum(axis=1), g))
     return [np.concatenate(p) for p in zip(*parts, strict=True)]
