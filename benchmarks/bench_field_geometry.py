@@ -28,9 +28,8 @@ from _common import emit
 from analysis.fim import peb
 from placement.cli.common import system_choice
 from placement.rangetable import sight
-from placement.tags import random_nodes
-from placement.validation import field_errors
-from simulation import Room, streams
+from placement.validation import field_errors, field_tags
+from simulation import Room
 
 #: the field check's seed, as in bench_against_naive.py
 SEED = 7
@@ -48,12 +47,12 @@ def load_layout(path: str, M: int | None) -> np.ndarray:
     return np.asarray(data[str(M)], dtype=float)
 
 
-def field_tags(room, system, anchors, draws: int):
+def tag_geometry(room, system, anchors, draws: int):
     """Per tag of the field draws: errors (m), verified, anchors in sight (n,), GDOP (n,)."""
     parts = []
     for d in range(draws):
         E = field_errors(room, anchors, TAGS, 0.03, d, SEED, system=system)
-        tags = random_nodes(room, TAGS, streams.stream(SEED, 0, d))  # field_errors' tags
+        tags = field_tags(room, TAGS, d, SEED)  # the tags of field_errors' draw d
         seen = sight(room, system, anchors, tags)  # line of sight and reach
         g = peb(anchors, tags, sigma=np.where(seen, 1.0, np.inf))  # GDOP of the seen
         parts.append((E[0], E[1] > 0, seen.sum(axis=1), g))
@@ -71,7 +70,7 @@ def main() -> None:
     room = Room.from_toml(args.room)
     system = system_choice(args.system)
     anchors = load_layout(args.layout, args.M)
-    e, verified, seen, g = field_tags(room, system, anchors, args.draws)
+    e, verified, seen, g = tag_geometry(room, system, anchors, args.draws)
     ok = np.isfinite(e)
     e2 = np.where(ok, e, 0.0) ** 2
     tag = {"room": room.name, "system": system.name, "layout": args.layout, "M": len(anchors)}

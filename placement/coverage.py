@@ -40,6 +40,10 @@ from simulation.statistics import BELOW_TARGET_COST  # the penalty, beside the n
 K_LINE_OF_SIGHT = 5
 #: the anchors a least-squares fix needs
 K_FIX = 4
+#: the GDOP of the anchors in sight above which a robust plan counts a tag as in a shadow
+#: (:class:`CoverageTarget`): ten times the range error, decimetres where ranges are good to
+#: a centimetre
+SHADOW_GDOP = 10.0
 
 
 def coverage_k(system) -> int:
@@ -94,18 +98,24 @@ class CoverageTarget:
     share h of the table's sight points (:func:`placement.rangetable.sight_points`) that
     see fewer than ``sight_k`` anchors counts as tags fixed E m off
     (:func:`simulation.statistics.mixed_statistic`): the shadow of a column between the
-    nodes costs what its tags' fixes on echoes cost."""
+    nodes costs what its tags' fixes on echoes cost. With a ``gdop_limit``, a sight point
+    whose anchors in sight have a GDOP above it, or lie in one plane with it, counts as a
+    shadow too (:func:`placement.dilution.poor_sight_share`): the tags between the nodes of an
+    aisle seen along the aisle."""
 
     k: int
     share: float
     sight_k: int = K_FIX
     shadow_error: float = 0.0
+    gdop_limit: float | None = None
 
     def __post_init__(self) -> None:
         checks.count("k", self.k, low=1, high=10_000)
         checks.real("share", self.share, low=0.0, high=1.0)
         checks.count("sight_k", self.sight_k, low=1, high=10_000)
         checks.real("shadow_error", self.shadow_error, low=0.0, unit="m")
+        if self.gdop_limit is not None:
+            checks.real("gdop_limit", self.gdop_limit, low=0.0, low_open=True)
 
     def needed(self, P: int) -> int:
         """The nodes of P that must be covered: ⌈share · P⌉, a product within a tie of
@@ -114,13 +124,16 @@ class CoverageTarget:
 
     def to_dict(self) -> dict:
         return {"k": self.k, "share": self.share, "sight_k": self.sight_k,
-                "shadow_error": self.shadow_error}  # fmt: skip
+                "shadow_error": self.shadow_error, "gdop_limit": self.gdop_limit}  # fmt: skip
 
     @classmethod
     def from_dict(cls, d: dict) -> CoverageTarget:
-        """The target of :meth:`to_dict` (one written before the sight points: none there)."""
+        """The target of :meth:`to_dict` (one written before the sight points or their
+        geometry: none there)."""
+        limit = d.get("gdop_limit")
         return cls(int(d["k"]), float(d["share"]), int(d.get("sight_k", K_FIX)),
-                   float(d.get("shadow_error", 0.0)))  # fmt: skip
+                   float(d.get("shadow_error", 0.0)),
+                   None if limit is None else float(limit))  # fmt: skip
 
 
 def constrain(costs, counts, target: CoverageTarget | None) -> np.ndarray:

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from placement.coverage import CoverageTarget, constrain, visibility
+from placement.dilution import poor_sight_share
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.tags import random_nodes
 from placement.workers import run_jobs
@@ -61,8 +62,8 @@ class RangeTable:
     mounted points (m); room the room and system the system simulated (its positioning
     solves the table's fixes); line_of_sight (D, P, N) bool, nothing blocks the direct
     path. seed, mount_tolerance (m), exact_draws and precision describe how it was drawn.
-    sight (Q, N) bool: sight point q (:func:`sight_points`) sees candidate j in line of
-    sight and reach (:func:`sight`). coverage_target: a
+    sight (Q, N) bool: sight point q of ``sight_points`` (Q, 3) (:func:`sight_points`) sees
+    candidate j in line of sight and reach (:func:`sight`). coverage_target: a
     :class:`placement.coverage.CoverageTarget` the costs of its layouts enforce
     (:func:`table_costs`; None: none).
     """
@@ -79,6 +80,7 @@ class RangeTable:
     exact_draws: int
     precision: str
     sight: np.ndarray
+    sight_points: np.ndarray
     coverage_target: CoverageTarget | None = None
 
     @property
@@ -306,8 +308,11 @@ def range_table(
     if nodes.ndim == 2:
         nodes = node_draws(room, nodes, draws, spec["exact_draws"], seed)
     ranges, dist, los = _simulate(room, cand, 0, nodes, spec, executor, chunk, progress)
-    seen = sight(room, spec["system"], cand, sight_points(room))
-    return RangeTable(cand, nodes, ranges, dist, room, line_of_sight=los, sight=seen, **spec)
+    pts = sight_points(room)
+    seen = sight(room, spec["system"], cand, pts)
+    return RangeTable(
+        cand, nodes, ranges, dist, room, line_of_sight=los, sight=seen, sight_points=pts, **spec
+    )
 
 
 def extend_table(
@@ -339,7 +344,7 @@ def extend_table(
         distances=np.concatenate([table.distances, dist], axis=2),
         line_of_sight=np.concatenate([table.line_of_sight, los], axis=2),
         sight=np.concatenate(
-            [table.sight, sight(room, table.system, new, sight_points(room))], axis=1
+            [table.sight, sight(room, table.system, new, table.sight_points)], axis=1
         ),  # fmt: skip
     )
 
@@ -400,11 +405,16 @@ def table_costs(table: RangeTable, layouts, statistic: str = "variance") -> np.n
 def _shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> np.ndarray:
     """(L,) the ``statistic`` of each layout's errors (L, n); under a coverage target with a
     shadow error E, the share of the sight points that see fewer than its ``sight_k``
-    anchors counts as tags fixed E m off (:class:`placement.coverage.CoverageTarget`)."""
+    anchors (or, with its ``gdop_limit``, see them in a poorer geometry:
+    :func:`placement.dilution.poor_sight_share`) counts as tags fixed E m off
+    (:class:`placement.coverage.CoverageTarget`)."""
     target = table.coverage_target
     if target is None or target.shadow_error <= 0:
         return row_statistics(statistic, errors)
-    h = np.mean(sight_counts(table, layouts, points=True) < target.sight_k, axis=1)
+    S = _layout_indices(table, layouts)
+    h = poor_sight_share(
+        table.sight_points, table.candidates, table.sight, S, target.sight_k, target.gdop_limit
+    )
     return row_statistics(statistic, errors, shadow=(h, target.shadow_error))
 
 

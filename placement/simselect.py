@@ -537,17 +537,19 @@ def simulated_select(
 def coverage_target(opt: SearchOptions, cover, shadow: float = 0.0):
     """The :class:`placement.coverage.CoverageTarget` the search keeps to: ``opt.min_coverage``
     of the nodes with the coverage selection's k where the selection ``cover`` reaches it,
-    and the sight points' ``shadow`` error (m, :func:`shadow_error`; 0: none); None:
-    neither (no target, or one that M anchors cannot reach, or every node sees every
+    and the sight points' ``shadow`` error (m, :func:`shadow_error`; 0: none), counting the
+    points whose anchors in sight have a GDOP above :data:`placement.coverage.SHADOW_GDOP`;
+    None: neither (no target, or one that M anchors cannot reach, or every node sees every
     candidate, and no shadow)."""
-    from placement.coverage import K_FIX, CoverageTarget
+    from placement.coverage import K_FIX, SHADOW_GDOP, CoverageTarget
 
     share = opt.min_coverage or 0.0
     if share <= 0 or cover is None or not ties.reaches(cover.covered, share):
         share = 0.0
     if share <= 0 and shadow <= 0:
         return None
-    return CoverageTarget(cover.k if cover else K_FIX, share, K_FIX, shadow)
+    limit = SHADOW_GDOP if shadow > 0 else None
+    return CoverageTarget(cover.k if cover else K_FIX, share, K_FIX, shadow, limit)
 
 
 #: the random layouts whose fixes in the shadows measure the shadow error

@@ -314,6 +314,13 @@ def mounted_errors(
     return _errors(room, system, anchors, nodes, ranges)
 
 
+def field_tags(room, tags: int, draw, seed) -> np.ndarray:
+    """(tags, 3) the tag points of draw ``draw`` of the field check (:func:`field_errors`):
+    uniform random points of the room's tag zones (:func:`random_nodes`), the stream
+    (0, draw) of ``seed``."""
+    return random_nodes(room, tags, streams.stream(seed, 0, draw))
+
+
 def field_errors(
     room, anchors, tags: int, tolerance, draw, seed, precision=None, system=None
 ) -> np.ndarray:
@@ -322,7 +329,7 @@ def field_errors(
     the stream (0, draw) of ``seed``) with the anchors (M, 3) mounted within ``tolerance``
     m (:func:`mounted_errors`' mounting of the same draw), one noise realization,
     positions solved by the ``system``'s positioning."""
-    nodes = random_nodes(room, tags, streams.stream(seed, 0, draw))
+    nodes = field_tags(room, tags, draw, seed)
     return mounted_errors(room, anchors, nodes, tolerance, draw, seed, precision, 1, system)
 
 

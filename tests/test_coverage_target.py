@@ -2,6 +2,7 @@
 any layout that meets it, in the range table's costs, the scene draws' cost and the search,
 and the sweep plans every M for its coverage target."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 
 from placement.costs import DrawsCost
 from placement.coverage import BELOW_TARGET_COST, CoverageTarget, constrain, visibility
+from placement.dilution import poor_sight_share
 from placement.rangetable import (
     node_draws,
     range_table,
@@ -101,8 +103,9 @@ def test_the_search_keeps_to_a_target_it_can_reach_and_ignores_one_it_cannot(tab
     opts = SearchOptions(**{**SEARCH.__dict__, "min_coverage": reach})
     kept = simulated_select(ROOM, M, statistic="rms", options=opts, table=table, rng=2)
     assert kept.coverage_target == CoverageTarget(5, reach)
-    assert kept.to_dict()["coverage_target"] == {"k": 5, "share": reach, "sight_k": 4,
-                                                 "shadow_error": 0.0}  # fmt: skip
+    assert kept.to_dict()["coverage_target"] == {
+        "k": 5, "share": reach, "sight_k": 4, "shadow_error": 0.0, "gdop_limit": None
+    }  # fmt: skip
     meets = [np.mean(sight_counts(table, S[None])[0] >= 5) >= reach - 1e-12 for S, _ in kept.optima]
     costs = [cost for _, cost in kept.optima]
     assert meets[0] and np.array_equal(kept.indices, kept.optima[0][0])
@@ -242,6 +245,14 @@ def test_the_shadows_tags_count_in_the_table_costs(table):
     for i in np.flatnonzero(h > 0)[:5]:
         assert kept[i] == pytest.approx(mixed_statistic("rms", e[i], h[i], 1.5), rel=1e-12)
     assert CoverageTarget.from_dict(target.to_dict()) == target
+    # with a GDOP limit the points seeing their anchors in a poor geometry count too
+    poor = dataclasses.replace(target, gdop_limit=2.0)
+    hp = poor_sight_share(table.sight_points, CAND, table.sight, layouts, 2, 2.0)
+    assert np.all(hp >= h) and np.any(hp > h)
+    graded = table_costs(dataclasses.replace(table, coverage_target=poor), layouts, "rms")
+    for i in np.flatnonzero(hp > h)[:5]:
+        assert graded[i] == pytest.approx(mixed_statistic("rms", e[i], hp[i], 1.5), rel=1e-12)
+    assert CoverageTarget.from_dict(poor.to_dict()) == poor
     assert CoverageTarget.from_dict({"k": 5, "share": 0.5}) == CoverageTarget(5, 0.5)
 
 
@@ -249,7 +260,7 @@ def test_a_robust_search_counts_the_shadows_tags_least_squares_does_not(table):
     """With positioning that rejects echoes the search counts the tags in the shadows at
     the error that fixes in shadows have in random layouts, and starts a chain from the
     sight selection; least squares counts nothing."""
-    from placement.coverage import covered_share, greedy
+    from placement.coverage import SHADOW_GDOP, covered_share, greedy
     from placement.simselect import shadow_error
     from simulation import System
 
@@ -258,7 +269,7 @@ def test_a_robust_search_counts_the_shadows_tags_least_squares_does_not(table):
     sel = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, table=t, rng=2)
     E = shadow_error(t, 5, 2)
     assert E > 0.1  # a fix on an echo: decimetres to metres off
-    assert sel.coverage_target == CoverageTarget(5, 0.0, 4, E)
+    assert sel.coverage_target == CoverageTarget(5, 0.0, 4, E, SHADOW_GDOP)
     assert sel.sight.covered >= covered_share(t.sight, greedy(t.sight, 5, 4), 4) - 1e-12
     assert sel.to_dict()["sight"]["covered"] == sel.sight.covered
     ls = simulated_select(ROOM, 5, statistic="rms", options=SEARCH, table=table, rng=2)

@@ -247,7 +247,7 @@ def test_the_grid_check_solves_with_the_systems_positioning():
 def test_the_field_check_draws_random_tags_and_mounting_error_together():
     """The field figure: per draw, random tags (not the grid) with the anchors mounted
     within the tolerance, one noise realization; reproducible from ``rng``."""
-    from placement.validation import field_errors, random_nodes, summary
+    from placement.validation import field_errors, field_tags, mounted_errors, random_nodes, summary
 
     a = ROOM.corners_layout()
     opt = ValidationOptions(realizations=2, held_out_realizations=0, random_nodes=15,
@@ -262,6 +262,11 @@ def test_the_field_check_draws_random_tags_and_mounting_error_together():
     assert errors.shape == (2, 45) and not errors[1].any() and v.field.verified == 0
     assert v.field.n == 45 and v.mounting is None
     assert validate_layout(ROOM, a, rng=3, options=opt, nodes=NODES).field == v.field
+    # field_tags are the tags of field_errors' draw: the same errors at them
+    tags = [field_tags(ROOM, 15, d, int(child)) for d in range(2)]
+    assert ROOM.contains(tags[0]).all() and not np.allclose(tags[0], tags[1])
+    again = mounted_errors(ROOM, a, tags[1], 0.03, 1, int(child), None, 1)
+    np.testing.assert_allclose(again, errors[:, 15:30], rtol=0, atol=1e-12)
     # the tags of a draw are random points of the node region, a new set per draw
     t0 = random_nodes(ROOM, len(NODES), np.random.default_rng(0))
     assert ROOM.contains(t0).all() and not np.allclose(t0, NODES)

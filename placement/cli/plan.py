@@ -314,9 +314,11 @@ def _print_result(res, args) -> None:
               f"{('first', 'second')[n]} search chain's start")  # fmt: skip
     share, target = res.settings.search.min_coverage, search.get("coverage_target")
     if target and target.get("shadow_error"):
-        print(f"shadows: a tag seeing fewer than {target['sight_k']} anchors in line of sight "
-              f"counts as a fix {target['shadow_error']:.2f} m off (the RMS error of such fixes "
-              "in random layouts)")  # fmt: skip
+        poor = (f" or seeing them at a GDOP above {target['gdop_limit']:g}"
+                if target.get("gdop_limit") else "")  # fmt: skip
+        print(f"shadows: a tag seeing fewer than {target['sight_k']} anchors in line of sight"
+              f"{poor} counts as a fix {target['shadow_error']:.2f} m off (the RMS error of "
+              "fixes in shadows in random layouts)")  # fmt: skip
     if share and target:
         print(f"coverage target: every layout kept to {100 * share:g} % of the nodes seeing "
               f"{target['k']} anchors in line of sight and reach")  # fmt: skip
