@@ -75,3 +75,32 @@ def emit(name: str, **fields) -> None:
         "machine": platform.machine(),
     }
     print(json.dumps(rec), flush=True)
+
+
+def room_parser(doc: str) -> argparse.ArgumentParser:
+    """A parser with the options of a benchmark in one room with one system: ``--room``
+    (a room file) and ``--system`` (a preset or a TOML file, default recommended)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--room", required=True)
+    ap.add_argument("--system", default="recommended", help="a preset or a TOML file")
+    return ap
+
+
+def room_and_system(args):
+    """(room, system) of the parsed options of :func:`room_parser`."""
+    from placement.cli.common import system_choice
+    from simulation import Room
+
+    return Room.from_toml(args.room), system_choice(args.system)
+
+
+def candidates_in_sight(room, system):
+    """(candidates (N, 3), sight points (Q, 3), seen (Q, N)): the search's candidate grid of
+    the room, its sight points and which candidates each sees in line of sight and reach."""
+    from placement.rangetable import sight, sight_points
+    from placement.simselect import SearchOptions
+    from placement.surfaces import candidate_grid
+
+    cand = candidate_grid(room, SearchOptions().spacing_for(room))
+    pts = sight_points(room)
+    return cand, pts, sight(room, system, cand, pts)

@@ -16,28 +16,22 @@ plan's.
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
 import numpy as np
-from _common import emit
+from _common import emit, room_and_system, room_parser
 
 from placement import naive_layout
-from placement.cli.common import system_choice
 from placement.validation import field_errors
-from simulation import Room
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = room_parser(__doc__)
     ap.add_argument("result_dir")
-    ap.add_argument("--room", required=True)
-    ap.add_argument("--system", default="recommended", help="a preset or a TOML file")
     ap.add_argument("--draws", type=int, default=10)
     args = ap.parse_args()
-    room = Room.from_toml(args.room)
-    system = system_choice(args.system)
+    room, system = room_and_system(args)
     planned = np.array(json.loads((Path(args.result_dir) / "layout.json").read_text())["anchors"])
     layouts = {"planned": planned, "naive": naive_layout(room, len(planned)),
                "corners": room.corners_layout()}  # fmt: skip

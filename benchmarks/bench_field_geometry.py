@@ -19,17 +19,14 @@ mean, P95, RMS, GDOP percentiles).
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
-from _common import emit
+from _common import emit, room_and_system, room_parser
 
 from analysis.fim import peb
-from placement.cli.common import system_choice
 from placement.rangetable import sight
 from placement.validation import field_errors, field_tags
-from simulation import Room
 
 #: the field check's seed, as in bench_against_naive.py
 SEED = 7
@@ -60,15 +57,12 @@ def tag_geometry(room, system, anchors, draws: int):
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = room_parser(__doc__)
     ap.add_argument("layout", help="a plan's layout.json or a sweep's layouts.json")
     ap.add_argument("--M", type=int, default=None, help="the sweep's M (layouts.json)")
-    ap.add_argument("--room", required=True)
-    ap.add_argument("--system", default="recommended", help="a preset or a TOML file")
     ap.add_argument("--draws", type=int, default=10)
     args = ap.parse_args()
-    room = Room.from_toml(args.room)
-    system = system_choice(args.system)
+    room, system = room_and_system(args)
     anchors = load_layout(args.layout, args.M)
     e, verified, seen, g = tag_geometry(room, system, anchors, args.draws)
     ok = np.isfinite(e)

@@ -19,19 +19,13 @@ P90 and P97 before and after.
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
-from _common import emit
+from _common import candidates_in_sight, emit, room_and_system, room_parser
 from bench_field_geometry import load_layout
 
 from analysis.fim import peb
-from placement.cli.common import system_choice
-from placement.rangetable import sight, sight_points
-from placement.simselect import SearchOptions
-from placement.surfaces import candidate_grid
-from simulation import Room
 
 #: the GDOP a point's term is capped at (a point in a shadow counts this much)
 CAP = 50.0
@@ -63,19 +57,14 @@ def swap_search(cand, V, pts, S, steps: int, rng) -> np.ndarray:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = room_parser(__doc__)
     ap.add_argument("layout", help="the starting layout: layout.json or layouts.json")
     ap.add_argument("--M", type=int, default=None)
-    ap.add_argument("--room", required=True)
-    ap.add_argument("--system", default="recommended")
     ap.add_argument("--steps", type=int, default=400)
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
-    room = Room.from_toml(args.room)
-    system = system_choice(args.system)
-    cand = candidate_grid(room, SearchOptions().spacing_for(room))
-    pts = sight_points(room)
-    V = sight(room, system, cand, pts)
+    room, system = room_and_system(args)
+    cand, pts, V = candidates_in_sight(room, system)
     start = load_layout(args.layout, args.M)
     S0 = np.array([int(np.argmin(np.linalg.norm(cand - a, axis=1))) for a in start])
     S = swap_search(cand, V, pts, S0, args.steps, np.random.default_rng(0))

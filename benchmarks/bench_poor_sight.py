@@ -15,31 +15,19 @@ line: microseconds per layout, each way.
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from _common import best_time, emit
+from _common import best_time, candidates_in_sight, emit, room_and_system, room_parser
 
-from placement.cli.common import system_choice
 from placement.coverage import SHADOW_GDOP
 from placement.dilution import poor_sight_share
-from placement.rangetable import sight, sight_points
-from placement.simselect import SearchOptions
-from placement.surfaces import candidate_grid
-from simulation import Room
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--room", required=True)
-    ap.add_argument("--system", default="recommended", help="a preset or a TOML file")
+    ap = room_parser(__doc__)
     ap.add_argument("--M", type=int, default=20)
     args = ap.parse_args()
-    room = Room.from_toml(args.room)
-    system = system_choice(args.system)
-    cand = candidate_grid(room, SearchOptions().spacing_for(room))
-    pts = sight_points(room)
-    seen = sight(room, system, cand, pts)
+    room, system = room_and_system(args)
+    cand, pts, seen = candidates_in_sight(room, system)
     rng = np.random.default_rng(0)
     S = np.stack([rng.choice(len(cand), args.M, replace=False) for _ in range(64)])
     poor_sight_share(pts, cand, seen, S, 4, SHADOW_GDOP)  # compile
