@@ -66,9 +66,10 @@ def test_plan_finalists_are_bounded_by_the_library_swarm(argv, particles):
 
 
 def test_a_robust_plan_short_of_the_coverage_it_could_reach_prints_the_coverage_note():
-    # the committed recommended L-lab: 89.4 % of the nodes see 5 anchors where the coverage
-    # selection covers 97.6 %; the warehouse's selection cannot reach 95 %, techtile's nodes
-    # see every anchor, the paper's L-lab does not verify fixes: no note; nor with a target
+    # the committed recommended L-lab: fewer of the nodes see 5 anchors (88.2 %) than the
+    # coverage selection covers (97.6 %); the warehouse's selection cannot reach 95 %,
+    # techtile's nodes see every anchor, the paper's L-lab does not verify fixes: no note;
+    # nor with a target
     import dataclasses
     from pathlib import Path
 
@@ -78,8 +79,10 @@ def test_a_robust_plan_short_of_the_coverage_it_could_reach_prints_the_coverage_
     examples = Path(__file__).resolve().parent.parent / "docs" / "examples"
     lab = PlacementResult.read(examples / "l-shaped-lab-recommended")
     note = coverage_note(lab)
-    assert note.startswith("note: 89.4 % of the nodes see 5 anchors")
-    assert "covers 97.6 % with 8" in note and "--min-coverage 0.95" in note
+    seen, cover = lab.validation.covered, lab.settings.search_result["coverage"]["covered"]
+    assert seen < cover - 0.05  # what the note is for
+    assert note.startswith(f"note: {100 * seen:.1f} % of the nodes see 5 anchors")
+    assert f"covers {100 * cover:.1f} % with 8" in note and "--min-coverage 0.95" in note
     for name in ("warehouse-aisles-recommended", "techtile-recommended", "l-shaped-lab"):
         assert coverage_note(PlacementResult.read(examples / name)) is None
     search = dataclasses.replace(lab.settings.search, min_coverage=0.9)
