@@ -249,45 +249,117 @@ def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True)
+def _normal_equations(ab, rho):  # pragma: no cover - compiled
+    """The normal equations S x = g of the heard anchors' squared-range differences
+    (:func:`linear_fix`) for anchors ab (M, 3) and ranges rho (M,) (NaN: not heard):
+    (n heard, S as (s00, s01, s02, s11, s12, s22), g (3,), the anchors' centroid (3,),
+    the mean squared range)."""
+    n = 0
+    m = np.zeros(3)
+    ma2 = mr2 = 0.0
+    for j in range(ab.shape[0]):
+        if rho[j] == rho[j]:
+            n += 1
+            m += ab[j]
+            ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
+            mr2 += rho[j] * rho[j]
+    S, g = np.zeros(6), np.zeros(3)
+    if n == 0:
+        return n, S, g, m, mr2
+    m, ma2, mr2 = m / n, ma2 / n, mr2 / n
+    for j in range(ab.shape[0]):
+        if rho[j] == rho[j]:
+            c0, c1, c2 = 2 * (ab[j, 0] - m[0]), 2 * (ab[j, 1] - m[1]), 2 * (ab[j, 2] - m[2])
+            rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (rho[j] * rho[j] - mr2)
+            S[0] += c0 * c0
+            S[1] += c0 * c1
+            S[2] += c0 * c2
+            S[3] += c1 * c1
+            S[4] += c1 * c2
+            S[5] += c2 * c2
+            g[0] += c0 * rhs
+            g[1] += c1 * rhs
+            g[2] += c2 * rhs
+    return n, S, g, m, mr2
+
+
+@numba.njit(cache=True)
+def _cofactors(S):  # pragma: no cover - compiled
+    """The cofactors (c00, c01, c02, c11, c12, c22) of the symmetric 3 × 3 matrix S
+    (s00, s01, s02, s11, s12, s22) and its determinant."""
+    s00, s01, s02, s11, s12, s22 = S[0], S[1], S[2], S[3], S[4], S[5]
+    c = np.empty(6)
+    c[0], c[1], c[2] = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+    c[3], c[4], c[5] = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+    return c, s00 * c[0] + s01 * c[1] + s02 * c[2]
+
+
+@numba.njit(cache=True)
+def _cofactor_solve(c, det, g, x) -> None:  # pragma: no cover - compiled
+    """x (3,) = S⁻¹ g from the cofactors c and determinant of S (:func:`_cofactors`)."""
+    x[0] = (c[0] * g[0] + c[1] * g[1] + c[2] * g[2]) / det
+    x[1] = (c[1] * g[0] + c[3] * g[1] + c[4] * g[2]) / det
+    x[2] = (c[2] * g[0] + c[4] * g[1] + c[5] * g[2]) / det
+
+
+@numba.njit(cache=True)
 def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
     """x (3,) the linear solution of the heard anchors' squared-range differences (the
     normal equations S x = g, solved by cofactors) for anchors ab (M, 3) and ranges rho
     (M,) (NaN: not heard); False, x untouched, with fewer than 4 heard or when they are
     coplanar (det S ≤ ``coplanar`` · (tr S)³)."""
-    n = 0
-    m0 = m1 = m2 = ma2 = mr2 = 0.0
-    for j in range(ab.shape[0]):
-        if rho[j] == rho[j]:
-            n += 1
-            m0 += ab[j, 0]
-            m1 += ab[j, 1]
-            m2 += ab[j, 2]
-            ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
-            mr2 += rho[j] * rho[j]
+    n, S, g, _, _ = _normal_equations(ab, rho)
     if n < 4:
         return False
-    m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
-    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
-    for j in range(ab.shape[0]):
-        if rho[j] == rho[j]:
-            c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
-            rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (rho[j] * rho[j] - mr2)
-            s00 += c0 * c0
-            s01 += c0 * c1
-            s02 += c0 * c2
-            s11 += c1 * c1
-            s12 += c1 * c2
-            s22 += c2 * c2
-            g0 += c0 * rhs
-            g1 += c1 * rhs
-            g2 += c2 * rhs
-    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    det = s00 * c00 + s01 * c01 + s02 * c02
-    tr = s00 + s11 + s22
+    c, det = _cofactors(S)
+    tr = S[0] + S[3] + S[5]
     if not det > coplanar * tr * tr * tr:  # coplanar: no linear solution
         return False
-    x[0] = (c00 * g0 + c01 * g1 + c02 * g2) / det
-    x[1] = (c01 * g0 + c11 * g1 + c12 * g2) / det
-    x[2] = (c02 * g0 + c12 * g1 + c22 * g2) / det
+    _cofactor_solve(c, det, g, x)
+    return True
+
+
+@numba.njit(cache=True)
+def mirror_fixes(ab, rho, x, y) -> bool:  # pragma: no cover - compiled
+    """x (3,) and y (3,) the two positions that the ranges rho (M,) of coplanar anchors ab
+    (M, 3) (NaN: not heard; at least 3 heard, not collinear) fix, mirror images of each
+    other in the anchors' plane (docs/model.md, "Positioning that rejects echoes"): the
+    squared-range differences fix the position's projection onto the plane (the normal
+    equations S p = g of :func:`linear_fix` with the component along the plane's normal n,
+    the null direction of S, held at the plane), and the mean squared range its distance h
+    from the plane, x = p + h n, y = p − h n (h = 0 where the ranges are too short to
+    reach off the plane). False, x and y untouched, with fewer than 3 heard or collinear
+    anchors."""
+    k, S, g, m, mr2 = _normal_equations(ab, rho)
+    if k < 3:
+        return False
+    c, _ = _cofactors(S)
+    # the null direction of a rank-2 S: its adjugate's largest row
+    rows = ((c[0], c[1], c[2]), (c[1], c[3], c[4]), (c[2], c[4], c[5]))
+    n0, n1, n2, best = 0.0, 0.0, 0.0, 0.0
+    for r in rows:
+        size = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        if size > best:
+            n0, n1, n2, best = r[0], r[1], r[2], size
+    tr = S[0] + S[3] + S[5]
+    if not best > 1e-24 * tr**4:  # rank 1 or less: collinear anchors fix no plane
+        return False
+    size = math.sqrt(best)
+    n0, n1, n2 = n0 / size, n1 / size, n2 / size
+    # (S + tr n nᵀ) p = g + tr n (n · m): p on the plane through the centroid m
+    off = tr * (n0 * m[0] + n1 * m[1] + n2 * m[2])
+    T = np.array([S[0] + tr * n0 * n0, S[1] + tr * n0 * n1, S[2] + tr * n0 * n2,
+                  S[3] + tr * n1 * n1, S[4] + tr * n1 * n2, S[5] + tr * n2 * n2])  # fmt: skip
+    cT, det = _cofactors(T)
+    if not det > 0.0:
+        return False
+    p = np.empty(3)
+    _cofactor_solve(cT, det, np.array([g[0] + off * n0, g[1] + off * n1, g[2] + off * n2]), p)
+    q = 0.0  # the mean squared distance of p from the anchors heard
+    for j in range(ab.shape[0]):
+        if rho[j] == rho[j]:
+            q += (p[0] - ab[j, 0]) ** 2 + (p[1] - ab[j, 1]) ** 2 + (p[2] - ab[j, 2]) ** 2
+    h = math.sqrt(max(mr2 - q / k, 0.0))
+    x[0], x[1], x[2] = p[0] + h * n0, p[1] + h * n1, p[2] + h * n2
+    y[0], y[1], y[2] = p[0] - h * n0, p[1] - h * n1, p[2] - h * n2
     return True

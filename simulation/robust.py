@@ -34,12 +34,15 @@ schemes (Casas et al., 2006):
    deterministically: minimal sets of 4 heard anchors, in the order of their ranges (a
    near anchor is more often in sight) except that a range proved an echo comes after
    all the others (its excess bounded as in step 1 above :data:`SHORT`), each
-   solved from the linear solution of its squared-range differences; a hypothesis is
+   solved from the linear solution of its squared-range differences (:func:`_minimal_fix`:
+   coplanar anchors fix two mirror images in their plane, the better is taken; nearly
+   coplanar ones, :data:`FLAT`, a solution polished by least squares); a hypothesis is
    scored by its contradictions (ranges shorter than its distance by more than
    :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one better than the best
    so far is refined by least squares on its inliers, then on those within 3σ of the
    refined fix; the first refined set of 5 or more that passes the test with no
-   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, and up to
+   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, up to
+   :data:`FOUR_HYPOTHESES` while only a minimal set agrees uncontradicted, and up to
    :data:`MORE_HYPOTHESES` while every set so far is contradicted: in a hall of racks the
    few direct ranges may be among the longest), else the best one is kept; where no 5
    anchors agree without a contradiction, the least contradicted minimal set whose 4
@@ -90,7 +93,15 @@ import math
 import numba
 import numpy as np
 
-from simulation.least_squares import linear_fix, lm_solve, lm_solve_inline, residuals, scratch
+from simulation.least_squares import (
+    into_floor_plan,
+    linear_fix,
+    lm_solve,
+    lm_solve_inline,
+    mirror_fixes,
+    residuals,
+    scratch,
+)
 from simulation.polyhedral import sees_near
 
 #: the quality of a fix (:class:`simulation.positioning.PositionFix` ``quality``)
@@ -109,6 +120,9 @@ HYPOTHESES = 300
 #: the most minimal sets step 4 tries for a fix that every set so far contradicts: in a
 #: hall of racks 4 or 5 of 18 heard anchors may see the tag, and their sets come late
 MORE_HYPOTHESES = 3000
+#: the most minimal sets step 4 tries for a fix while only a minimal set agrees with
+#: nothing contradicting it (4 ranges agree by chance more often than 5)
+FOUR_HYPOTHESES = 700
 #: (m, range σs): a range within the larger of the two of a hypothesis' distance is its
 #: inlier before refinement (a minimal set's fix is only roughly right)
 LOOSE = (0.2, 5.0)
@@ -141,6 +155,10 @@ MISSED_DETECTION = 1e-3
 #: det(S) ≤ COPLANAR · tr(S)³ of the linear normal equations S: the subset's anchors are
 #: (nearly) coplanar and its linear solution is not used
 COPLANAR = 1e-12
+#: det(S) ≤ FLAT · tr(S)³ of a minimal set's linear normal equations: its anchors are so
+#: nearly coplanar (three on the ceiling, one a little below) that the linear solution
+#: can be decimetres off; it is polished by least squares on the set's ranges
+FLAT = 1e-3
 #: the iterations of one dropping step's or one refinement's solve: from a good start a
 #: consistent set converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
@@ -457,17 +475,14 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
                 gtol, sigma, short, loose, work, geo,
             )  # fmt: skip
             npend = 0
-        if t >= HYPOTHESES and (best_short == 0 or (four_short == 0 and four_T <= MINIMAL_T)):
+        if t >= HYPOTHESES and (best_short == 0 or (t >= FOUR_HYPOTHESES and four_short == 0
+                                                    and four_T <= MINIMAL_T)):  # fmt: skip
             break  # something uncontradicted: search no further
         trial[:] = np.nan
         for i in range(4):
             trial[order[c[i]]] = rho0[order[c[i]]]
-        if not linear_fix(ab, trial, xt, COPLANAR):  # coplanar: solved from the first fit
-            xt[:] = x
-            iters += lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
-                              xtol, ftol, gtol, *work)[2]  # fmt: skip
-        for k in range(3):
-            xt[k] = min(max(xt[k], lo[k]), hi[k])
+        iters += _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter,
+                              xtol, ftol, gtol, loose, short, work)  # fmt: skip
         inl, nshort = _score(ab, rho0, xt, loose, max(loose, short))
         nshort *= M + 1  # as _contradictions counts them
         if best_short > 0 and t < HYPOTHESES:  # no uncontradicted set of 5 yet: for later
@@ -499,6 +514,66 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     return _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st,
                      four, four_x, four_short, four_T, four_st, used, fst, trial, short, loose,
                      geo)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def _clamp(x, lo, hi) -> None:  # pragma: no cover - compiled
+    """In place: x (3,) into the box [lo, hi]."""
+    for k in range(3):
+        x[k] = min(max(x[k], lo[k]), hi[k])
+
+
+@numba.njit(cache=True)
+def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+                 loose, short, work) -> int:  # fmt: skip  # pragma: no cover - compiled
+    """xt (3,) the fix of a minimal set (its ranges in trial (M,)) in the box [lo, hi]: the
+    linear solution of its squared-range differences; where its anchors are nearly
+    coplanar (:data:`FLAT`), that solution polished by least squares on the set's ranges
+    (off their plane it is ill-conditioned); where they are coplanar, the better of the
+    two mirror images (:func:`_mirror_fix`); where they are collinear, solved from the fit
+    so far x (3,) (xm (3,): scratch). Returns the iterations of the solves."""
+    iters = 0
+    if linear_fix(ab, trial, xt, COPLANAR):
+        if not linear_fix(ab, trial, xt, FLAT):  # nearly coplanar: polished
+            _outside(xt, lo, hi, poly)
+            iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                             xtol, ftol, gtol, *work)[2]  # fmt: skip
+    elif not _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short):
+        xt[:] = x  # collinear: from the fit so far
+        iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER), xtol,
+                         ftol, gtol, *work)[2]  # fmt: skip
+    _clamp(xt, lo, hi)
+    return iters
+
+
+@numba.njit(cache=True)
+def _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool:
+    # pragma: no cover - compiled
+    """xt (3,) the fix of a minimal set of coplanar anchors (its ranges in trial (M,)),
+    which have no linear solution off their plane: of the two mirror images in their plane
+    (:func:`mirror_fixes`), each moved into the box [lo, hi] and the floor plan ``poly``,
+    the one that fewer ranges of rho0 (M,) contradict, then with more inliers
+    (:func:`_score`), then that moved less (anchors on a ceiling or a wall put one image
+    outside the room) (xm (3,): scratch). False: the anchors are collinear."""
+    if not mirror_fixes(ab, trial, xt, xm):
+        return False
+    out_t, out_m = _outside(xt, lo, hi, poly), _outside(xm, lo, hi, poly)
+    in_t, short_t = _score(ab, rho0, xt, loose, max(loose, short))
+    in_m, short_m = _score(ab, rho0, xm, loose, max(loose, short))
+    if (short_m, -in_m, out_m) < (short_t, -in_t, out_t):
+        xt[:] = xm
+    return True
+
+
+@numba.njit(cache=True)
+def _outside(x, lo, hi, poly) -> float:  # pragma: no cover - compiled
+    """In place: x (3,) moved into the box [lo, hi] and the floor plan ``poly`` (K, 2)
+    (none with K = 0); returns how far it moved (m)."""
+    x0, x1, x2 = x[0], x[1], x[2]
+    _clamp(x, lo, hi)
+    if poly.shape[0] >= 3:
+        into_floor_plan(x, poly)
+    return math.sqrt((x[0] - x0) ** 2 + (x[1] - x1) ** 2 + (x[2] - x2) ** 2)
 
 
 @numba.njit(cache=True)

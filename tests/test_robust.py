@@ -3,6 +3,7 @@ small cases, one echo found with 5 anchors, the quality of every fix, the floor 
 the bounds, bad input."""
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -670,3 +671,75 @@ def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not()
     r = np.where(np.arange(len(a)) < 6, rho, np.nan)
     T_echo = 2 * locate(a, r[None], region=REGION, bounded=True, full_output=True).cost[0]
     assert T_echo / SIGMA**2 > thr[3]
+
+
+def test_the_mirror_images_of_coplanar_anchors_fit_their_ranges():
+    """Ranges from anchors in one plane (a ceiling, a tilted plane) fix a position only up
+    to its mirror image in that plane: both images fit every range (closed form), one is
+    the node; collinear anchors or fewer than 3 fix no plane."""
+    from simulation.least_squares import linear_fix, mirror_fixes
+
+    rng = np.random.default_rng(21)
+    tilt = np.array([0.3, -0.2, 1.0]) / np.linalg.norm([0.3, -0.2, 1.0])
+    for normal in (np.array([0.0, 0.0, 1.0]), tilt):
+        e1 = np.cross(normal, [1.0, 0.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(normal, e1)
+        for k in (3, 4, 6):
+            a = np.array([4.0, 3.0, 4.0]) + rng.uniform(-3, 3, (k, 1)) * e1 + rng.uniform(
+                -3, 3, (k, 1)) * e2  # fmt: skip
+            x = rng.uniform([1, 1, 0.5], [7, 5, 2.0])
+            rho = np.linalg.norm(a - x, axis=1)
+            p, q = np.empty(3), np.empty(3)
+            assert not linear_fix(a, rho, p, 1e-12)  # no linear solution off the plane
+            assert mirror_fixes(a, rho, p, q)
+            for y in (p, q):
+                assert np.allclose(np.linalg.norm(a - y, axis=1), rho, atol=1e-6)
+            assert min(np.linalg.norm(p - x), np.linalg.norm(q - x)) < 1e-6
+            assert np.isclose(p @ normal + q @ normal, 2 * a[0] @ normal)  # mirrored
+    line = np.outer(np.linspace(0, 6, 4), [1.0, 0.5, 0.0]) + [0, 0, 3.0]
+    for a in (line, line[:2]):
+        rho = np.linalg.norm(a - [2, 2, 1], axis=1)
+        assert not mirror_fixes(a, rho, np.empty(3), np.empty(3))
+
+
+# the warehouse's 20 anchors of docs/examples/warehouse-sweep (M = 20), 12 on its ceiling
+WAREHOUSE_20 = np.array(
+    [[9.04, 0.03, 3.73], [0.03, 3.34, 4.35], [0.03, 9.31, 1.26], [15.97, 1.36, 4.97],
+     [15.97, 9.31, 3.73], [2.11, 6.66, 4.97], [2.8, 4.01, 4.97], [3.5, 6.66, 4.97],
+     [6.27, 1.36, 4.97], [7.65, 1.36, 4.97], [10.43, 5.99, 4.97], [12.5, 2.02, 4.97],
+     [13.2, 0.03, 4.62], [3.5, 9.97, 3.47], [10.08, 9.97, 2.77], [15.97, 4.01, 4.0],
+     [1.76, 4.01, 4.97], [3.5, 8.96, 4.97], [5.23, 5.99, 4.97], [11.47, 6.66, 4.97]]
+)  # fmt: skip
+# three tags of its field check (tag, simulated ranges with the anchors mounted within
+# 3 cm): each sees 5 or 6 anchors, all or all but one on the ceiling; the rest are echoes
+WAREHOUSE_TAGS = [
+    ([7.592, 7.38, 1.33], [11.191, 10.304, 9.447, 12.611, 9.235, 6.609, 7.7, 5.523, 9.454,
+                           9.381, 4.838, 10.055, 12.125, 6.942, 6.921, 10.719, 8.366, 5.733,
+                           4.568, 5.375]),
+    ([6.394, 2.579, 0.8], [7.493, 7.336, np.nan, 10.897, 14.46, 8.964, 5.694, 8.396, 5.175,
+                           5.339, 8.366, 7.416, 8.984, 11.888, np.nan, 10.195, 6.413, 10.985,
+                           7.413, 9.371]),
+    ([10.785, 7.736, 1.624], [11.056, 12.583, 13.033, 10.919, 6.561, 9.374, 9.734, 8.065,
+                              10.593, 10.113, 3.796, 9.148, 11.006, 8.571, 9.807, 7.732,
+                              10.605, 8.118, 6.738, 3.581]),
+]  # fmt: skip
+
+
+def test_direct_ranges_from_ceiling_anchors_are_found_below_the_ceiling():
+    """Tags under the warehouse's racks that see only the ceiling anchors near them (and
+    one on a wall): the minimal sets of those anchors are coplanar (no linear solution) or
+    nearly so (a badly conditioned one), and are solved from their mirror images in the
+    ceiling: the image below it is the tag, and the anchors that see it are kept. Solved
+    from the first fit instead, which the echoes pull up to the ceiling, these fixes were
+    2–4 m off."""
+    room = Room.from_toml(Path(__file__).resolve().parents[1] / "examples/warehouse-aisles.toml")
+    tags = np.array([t for t, _ in WAREHOUSE_TAGS])
+    ranges = np.array([r for _, r in WAREHOUSE_TAGS])
+    fix = Positioning(method="robust", keep_in_room=True).locate(
+        room, WAREHOUSE_20, ranges, full_output=True
+    )
+    direct = np.abs(ranges - np.linalg.norm(WAREHOUSE_20 - tags[:, None], axis=-1)) < 0.05
+    # within the anchors' mounting error (3 cm) of the tag
+    assert np.all(np.linalg.norm(fix.x - tags, axis=1) < 0.1)
+    assert np.array_equal(fix.used, direct)
