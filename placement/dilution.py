@@ -89,9 +89,20 @@ def poor_sight_share(points, candidates, seen, layouts, k: int, gdop_limit=None)
             f"layouts: candidate indices must be in [0, {len(C) - 1}], got {S.min()} … {S.max()}"
         )
     k = checks.count("k", k, low=1, high=10_000)
-    limit = math.inf
     if gdop_limit is not None:
-        limit = checks.real("gdop_limit", gdop_limit, low=0.0, low_open=True)
-    if len(S) == 0 or len(P) == 0:
+        gdop_limit = checks.real("gdop_limit", gdop_limit, low=0.0, low_open=True)
+    return poor_sight_share_unchecked(P, C, V, S, k, gdop_limit)
+
+
+def poor_sight_share_unchecked(points, candidates, seen, layouts, k: int, gdop_limit=None):
+    """:func:`poor_sight_share` of arguments already checked (a range table's sight points,
+    candidates and sight, the layouts' candidate indices, the target's k and limit): the
+    planner's cost calls it for every batch of layouts it scores."""
+    S = np.ascontiguousarray(layouts, dtype=np.int64)
+    if len(S) == 0 or len(points) == 0:
         return np.zeros(len(S))
-    return _poor_rows(P, C, V, S, k, limit * limit)
+    limit = math.inf if gdop_limit is None else float(gdop_limit)
+    return _poor_rows(np.ascontiguousarray(points, dtype=float),
+                      np.ascontiguousarray(candidates, dtype=float),
+                      np.ascontiguousarray(seen, dtype=np.bool_), S, int(k),
+                      limit * limit)  # fmt: skip

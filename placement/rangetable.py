@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from placement.coverage import CoverageTarget, constrain, visibility
-from placement.dilution import poor_sight_share
+from placement.dilution import poor_sight_share_unchecked
 from placement.surfaces import mounting_surfaces, project, surface_index
 from placement.tags import random_nodes
 from placement.workers import run_jobs
@@ -412,7 +412,7 @@ def _shadowed_statistics(table: RangeTable, layouts, statistic: str, errors) -> 
     if target is None or target.shadow_error <= 0:
         return row_statistics(statistic, errors)
     S = _layout_indices(table, layouts)
-    h = poor_sight_share(
+    h = poor_sight_share_unchecked(
         table.sight_points, table.candidates, table.sight, S, target.sight_k, target.gdop_limit
     )
     return row_statistics(statistic, errors, shadow=(h, target.shadow_error))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from analysis.fim import gdop, peb
-from placement.dilution import poor_sight_share
+from placement.dilution import poor_sight_share, poor_sight_share_unchecked
 
 
 def _scene(seed=0, Q=400, N=24):
@@ -41,6 +41,8 @@ def test_the_poor_share_is_that_of_the_gdop_over_the_anchors_in_sight(k, limit):
     got = poor_sight_share(points, cand, seen, layouts, k, limit)
     ref = _reference(points, cand, seen, layouts, k, limit)
     np.testing.assert_allclose(got, ref, atol=1e-12)
+    # the planner's call, on arguments a range table has checked: the same shares
+    assert np.array_equal(poor_sight_share_unchecked(points, cand, seen, layouts, k, limit), got)
     assert 0.0 < got.min() and got.max() < 1.0  # the scene has both kinds
 
 
