@@ -234,18 +234,25 @@ def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
     moves to the nearest point of its boundary (z unchanged)."""
     if inside_floor_plan(p[0], p[1], poly):
         return
+    p[0], p[1] = nearest_on_boundary(p[0], p[1], poly)[1:]
+
+
+@numba.njit(cache=True)
+def nearest_on_boundary(x, y, poly):  # pragma: no cover - compiled
+    """(squared distance, x, y) of the point of the boundary of the polygon ``poly``
+    (K, 2) nearest to (x, y)."""
     K = poly.shape[0]
-    best, bx, by = math.inf, p[0], p[1]
+    best, bx, by = math.inf, x, y
     for i in range(K):
         x0, y0 = poly[i, 0], poly[i, 1]
         dx, dy = poly[(i + 1) % K, 0] - x0, poly[(i + 1) % K, 1] - y0
         L2 = dx * dx + dy * dy
-        t = 0.0 if L2 == 0 else min(max(((p[0] - x0) * dx + (p[1] - y0) * dy) / L2, 0.0), 1.0)
+        t = 0.0 if L2 == 0 else min(max(((x - x0) * dx + (y - y0) * dy) / L2, 0.0), 1.0)
         qx, qy = x0 + t * dx, y0 + t * dy
-        d = (p[0] - qx) ** 2 + (p[1] - qy) ** 2
+        d = (x - qx) ** 2 + (y - qy) ** 2
         if d < best:
             best, bx, by = d, qx, qy
-    p[0], p[1] = bx, by
+    return best, bx, by
 
 
 @numba.njit(cache=True)
@@ -308,15 +315,23 @@ def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
     normal equations S x = g, solved by cofactors) for anchors ab (M, 3) and ranges rho
     (M,) (NaN: not heard); False, x untouched, with fewer than 4 heard or when they are
     coplanar (det S ≤ ``coplanar`` · (tr S)³)."""
+    return linear_flatness(ab, rho, x, coplanar) > coplanar
+
+
+@numba.njit(cache=True)
+def linear_flatness(ab, rho, x, coplanar) -> float:  # pragma: no cover - compiled
+    """det S / (tr S)³ of the normal equations of :func:`linear_fix` (0 for anchors in a
+    plane, −1 with fewer than 4 heard), x (3,) their solution where it exceeds
+    ``coplanar`` (else x untouched)."""
     n, S, g, _, _ = _normal_equations(ab, rho)
     if n < 4:
-        return False
+        return -1.0
     c, det = _cofactors(S)
     tr = S[0] + S[3] + S[5]
-    if not det > coplanar * tr * tr * tr:  # coplanar: no linear solution
-        return False
-    _cofactor_solve(c, det, g, x)
-    return True
+    flat = det / (tr * tr * tr) if tr > 0.0 else 0.0
+    if flat > coplanar:
+        _cofactor_solve(c, det, g, x)
+    return flat
 
 
 @numba.njit(cache=True)

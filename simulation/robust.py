@@ -42,13 +42,17 @@ schemes (Casas et al., 2006):
    so far is refined by least squares on its inliers, then on those within 3σ of the
    refined fix; the first refined set of 5 or more that passes the test with no
    contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, up to
-   :data:`FOUR_HYPOTHESES` while only a minimal set agrees uncontradicted, and up to
-   :data:`MORE_HYPOTHESES` while every set so far is contradicted: in a hall of racks the
-   few direct ranges may be among the longest), else the best one is kept; where no 5
-   anchors agree without a contradiction, the least contradicted minimal set whose 4
-   ranges agree (T at most :data:`MINIMAL_T`; then the smallest T) is the fix when it is
-   less contradicted than the fix so far, or as little and with a smaller T (the minimal
-   sets are solved for this only once the search has found no such set of 5);
+   :data:`FOUR_HYPOTHESES` while only a minimal set agrees uncontradicted and passes the
+   test unpenalized (below), and up to :data:`MORE_HYPOTHESES` while every set so far is
+   contradicted or penalized: in a hall of racks the few direct ranges may be among the
+   longest), else the best one is kept; where no 5 anchors agree without a contradiction,
+   the least contradicted minimal set whose 4 ranges agree (T at most :data:`MINIMAL_T`)
+   is the fix when it is less contradicted than the fix so far, or as little and with a
+   smaller penalized T. With one degree of freedom, T cannot tell the direct set from a
+   wrong one that agrees by chance: T is penalized by :data:`MISS_PENALTY` for each miss
+   the contradictions forgive (below) and by :data:`HELD_PENALTY` for a fix held at the
+   room's boundary (:func:`_ranked`). The minimal sets are solved for this only once the
+   search has found no such set of 5;
 5. the fix grows (:func:`_grow`): each heard anchor left out whose range is within
    :data:`LOOSE` of its distance from the fix, the nearest first, joins it when the fix on
    the larger set still passes the test with no contradiction (a dropping step or the
@@ -95,10 +99,11 @@ import numpy as np
 
 from simulation.least_squares import (
     into_floor_plan,
-    linear_fix,
+    linear_flatness,
     lm_solve,
     lm_solve_inline,
     mirror_fixes,
+    nearest_on_boundary,
     residuals,
     scratch,
 )
@@ -121,7 +126,8 @@ HYPOTHESES = 300
 #: hall of racks 4 or 5 of 18 heard anchors may see the tag, and their sets come late
 MORE_HYPOTHESES = 3000
 #: the most minimal sets step 4 tries for a fix while only a minimal set agrees with
-#: nothing contradicting it (4 ranges agree by chance more often than 5)
+#: nothing contradicting it and passes the test with no penalty (:func:`_ranked`): 4 ranges
+#: agree by chance more often than 5; past it, up to :data:`MORE_HYPOTHESES`
 FOUR_HYPOTHESES = 700
 #: (m, range σs): a range within the larger of the two of a hypothesis' distance is its
 #: inlier before refinement (a minimal set's fix is only roughly right)
@@ -159,6 +165,15 @@ COPLANAR = 1e-12
 #: nearly coplanar (three on the ceiling, one a little below) that the linear solution
 #: can be decimetres off; it is polished by least squares on the set's ranges
 FLAT = 1e-3
+#: a fix within HELD m of the room's boundary is held there by the bounds (:func:`_held`)
+HELD = 1e-6
+#: what a forgiven miss adds to the T of a minimal set's fix in their ranking: −2 ln of the
+#: share of tags (about 4 % in the warehouse) where an anchor that the map says sees the tag
+#: has a range longer than :data:`LOOSE` (its direct path missed), as a likelihood would
+MISS_PENALTY = 6.4
+#: what a fix held at the room's boundary adds to its T in the ranking of minimal sets: the
+#: χ² quantile of one degree of freedom at 10⁻³ (a tag is not at the walls, a mirror image is)
+HELD_PENALTY = 10.8
 #: the iterations of one dropping step's or one refinement's solve: from a good start a
 #: consistent set converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
@@ -461,7 +476,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     trial, xt, xm, best_x = np.empty(M), np.empty(3), np.empty(3), np.empty(3)
     best_short, best_in, best_T, best_st = INFINITE, 0, T, 0
     four = np.empty(M)  # the best minimal set's fix, contradictions, T, status and ranges
-    four_x, four_short, four_T, four_st = np.empty(3), INFINITE, math.inf, 0
+    four_x, four_short, four_ev, four_T, four_st = np.empty(3), INFINITE, 0.0, math.inf, 0
     # minimal sets met before any uncontradicted set of 5: solved only if none is found
     # (their anchors, linear fixes and short ranges; :func:`_settle`)
     cap = min(HYPOTHESES, h * (h - 1) * (h - 2) * (h - 3) // 24)
@@ -469,14 +484,14 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     pend_short, npend = np.empty(cap, np.int64), 0
     for t in range(MORE_HYPOTHESES):
         if t == HYPOTHESES:  # the rule below reads the best minimal set: settle it now
-            four_short, four_T, iters, four_st = _settle(
+            four_short, four_ev, four_T, iters, four_st = _settle(
                 ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x,
-                four_short, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, short, loose, work, geo,
+                four_short, four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol,
+                ftol, gtol, sigma, thr, short, loose, work, geo,
             )  # fmt: skip
             npend = 0
         if t >= HYPOTHESES and (best_short == 0 or (t >= FOUR_HYPOTHESES and four_short == 0
-                                                    and four_T <= MINIMAL_T)):  # fmt: skip
+                                                    and four_T + four_ev <= thr[1])):  # fmt: skip
             break  # something uncontradicted: search no further
         trial[:] = np.nan
         for i in range(4):
@@ -488,9 +503,10 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         if best_short > 0 and t < HYPOTHESES:  # no uncontradicted set of 5 yet: for later
             npend = _put_off(pend, pend_x, pend_short, npend, order, c, xt, nshort)
         elif best_short > 0 and nshort <= four_short:
-            four_short, four_T, iters, four_st = _minimal(
-                ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo,
-                hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
+            four_short, four_ev, four_T, iters, four_st = _minimal(
+                ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters,
+                lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work,
+                geo,
             )  # fmt: skip
         if inl >= 5 and _better(nshort, inl, best_short, best_in):
             best_short, best_in, best_T, best_st, iters, done = _promising(
@@ -506,14 +522,14 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         x[:] = best_x
         fst[0] = best_st
         return best_T, best_in, iters
-    four_short, four_T, iters, four_st = _settle(
+    four_short, four_ev, four_T, iters, four_st = _settle(
         ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
-        four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short,
-        loose, work, geo,
+        four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
+        thr, short, loose, work, geo,
     )  # fmt: skip
     return _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st,
-                     four, four_x, four_short, four_T, four_st, used, fst, trial, short, loose,
-                     geo)  # fmt: skip
+                     four, four_x, four_short, four_ev, four_T, four_st, used, fst, trial, short,
+                     loose, geo, lo, hi, poly)  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")
@@ -533,8 +549,9 @@ def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xt
     two mirror images (:func:`_mirror_fix`); where they are collinear, solved from the fit
     so far x (3,) (xm (3,): scratch). Returns the iterations of the solves."""
     iters = 0
-    if linear_fix(ab, trial, xt, COPLANAR):
-        if not linear_fix(ab, trial, xt, FLAT):  # nearly coplanar: polished
+    flat = linear_flatness(ab, trial, xt, COPLANAR)
+    if flat > COPLANAR:
+        if flat <= FLAT:  # nearly coplanar: polished
             _outside(xt, lo, hi, poly)
             iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                              xtol, ftol, gtol, *work)[2]  # fmt: skip
@@ -578,8 +595,8 @@ def _outside(x, lo, hi, poly) -> float:  # pragma: no cover - compiled
 
 @numba.njit(cache=True)
 def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st, four,
-              four_x, four_short, four_T, four_st, used, fst, trial, short, loose,
-              geo):  # fmt: skip  # pragma: no cover - compiled
+              four_x, four_short, four_ev, four_T, four_st, used, fst, trial, short, loose,
+              geo, lo, hi, poly):  # fmt: skip  # pragma: no cover - compiled
     """The end of step 4 where no 5 anchors agree without a contradiction: the fix is the
     best refined set of 5 that something contradicts (best_x (3,), its contradictions,
     anchors, T and status), else the fix so far x (3,) (its T, n anchors ``used`` (M,));
@@ -587,14 +604,15 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
     status) replaces it when its 4 ranges agree and it is less contradicted, or as little
     and with a smaller T (``trial`` (M,): scratch). Returns (T, n, iterations)."""
     if best_in >= 5:
-        now, T, n = best_short, best_T, best_in  # a set of 5 that something contradicts
+        now, T, n, ev = best_short, best_T, best_in, 0.0  # a set of 5 that something contradicts
         x[:] = best_x
         fst[0] = best_st
     else:
         for j in range(used.shape[0]):
             trial[j] = rho0[j] if used[j] else np.nan
-        now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)  # the fix so far
-    if four_T <= MINIMAL_T and (four_short < now or (four_short == now == 0 and four_T < T)):
+        now, ev = _ranked(ab, rho0, trial, x, short, loose, geo, INFINITE, lo, hi, poly)
+    rests = four_short < now or (four_short == now == 0 and four_T + four_ev < T + ev)
+    if four_T <= MINIMAL_T and rests:
         x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
         fst[0] = four_st
         for j in range(used.shape[0]):
@@ -671,8 +689,8 @@ def _promising(ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, b
 
 @numba.njit(cache=True)
 def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
-            four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
-            short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
+            four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+            sigma, thr, short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
     """The minimal sets put off by :func:`_consensus` (their anchors pend (K, 4), linear
     fixes pend_x (K, 3) and short-range counts pend_short (K,), the first ``npend``), each
     passed to :func:`_minimal` in the order they were met when its short ranges are no more
@@ -685,16 +703,16 @@ def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four
         for i in range(4):
             trial[pend[p, i]] = rho0[pend[p, i]]
         xt[:] = pend_x[p]
-        four_short, four_T, iters, four_st = _minimal(
-            ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo, hi,
-            bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
+        four_short, four_ev, four_T, iters, four_st = _minimal(
+            ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters, lo,
+            hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work, geo,
         )  # fmt: skip
-    return four_short, four_T, iters, four_st
+    return four_short, four_ev, four_T, iters, four_st
 
 
 @numba.njit(cache=True)
-def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st, iters, lo, hi,
-             bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
+def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters,
+             lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work,
              geo):  # fmt: skip  # pragma: no cover
     """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
     squares from xt into the scratch xm (3,); kept in four (M,) and four_x (3,) when it has
@@ -704,14 +722,36 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_T, four_st,
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
-    # with a T no smaller than the best's, only fewer contradictions win: count no further
-    bound = four_short if Tm < four_T else four_short - 1
-    nshort = _contradictions(ab, rho0, trial, xm, short, loose, geo, bound)
-    if nshort < four_short or (nshort == four_short and Tm < four_T):
+    nshort, ev = _ranked(ab, rho0, trial, xm, short, loose, geo, four_short, lo, hi, poly)
+    if (nshort, Tm + ev) < (four_short, four_T + four_ev):
         four[:] = trial
         four_x[:] = xm
-        return nshort, Tm, iters + it, st
-    return four_short, four_T, iters + it, four_st
+        return nshort, ev, Tm, iters + it, st
+    return four_short, four_ev, four_T, iters + it, four_st
+
+
+@numba.njit(cache=True)
+def _ranked(ab, rho0, kept, x, short, long, geo, bound, lo, hi, poly):  # pragma: no cover
+    """(contradictions, penalty) of the fix x (3,) on the ranges kept (M,)
+    (:func:`_contradictions`, counting stopped above ``bound``): as contradicted fixes rank
+    by T plus the penalty, :data:`MISS_PENALTY` for each miss forgiven (an anchor that
+    the map says sees x with a long range) and :data:`HELD_PENALTY` for a fix held at the
+    room's boundary (as a mirror image is)."""
+    n, miss = _map_evidence(ab, rho0, kept, x, short, long, geo, bound + MISSES)
+    penalty = MISS_PENALTY * min(miss, MISSES) + HELD_PENALTY * _held(x, lo, hi, poly)
+    return n + max(miss - MISSES, 0), penalty
+
+
+@numba.njit(cache=True)
+def _held(x, lo, hi, poly) -> int:  # pragma: no cover - compiled
+    """1 when x (3,) lies on the boundary of the box [lo, hi] or of the floor plan ``poly``
+    (K, 2) (within :data:`HELD`), else 0."""
+    for k in range(3):
+        if x[k] - lo[k] <= HELD or hi[k] - x[k] <= HELD:
+            return 1
+    if poly.shape[0] >= 3 and nearest_on_boundary(x[0], x[1], poly)[0] <= HELD * HELD:
+        return 1
+    return 0
 
 
 @numba.njit(cache=True, inline="always")
@@ -772,16 +812,29 @@ def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragm
     than ``short`` m counts M + 1 (no path is shorter than the direct one: it outweighs
     whatever the map says), and on the map ``geo`` each kept anchor that does not see x
     and each anchor beyond the first :data:`MISSES` that surely sees x with a range longer
-    than its distance by more than ``long`` m counts 1. Counting stops above ``bound``."""
+    than its distance by more than ``long`` m counts 1 (:func:`_map_evidence`). Counting
+    stops above ``bound``."""
+    n, miss = _map_evidence(ab, rho0, kept, x, short, long, geo, bound)
+    return n + max(miss - MISSES, 0)
+
+
+@numba.njit(cache=True)
+def _map_evidence(ab, rho0, kept, x, short, long, geo, bound):  # pragma: no cover - compiled
+    """(contradictions before the misses, misses) of the fix x (3,) on the ranges kept
+    (M,): the first counts the short ranges (M + 1 each) and the kept anchors that do not
+    see x on the map ``geo``; the second, the anchors not kept that surely see x with a
+    range longer than its distance by more than ``long`` m (:func:`_contradictions` forgives
+    the first :data:`MISSES`). Counting stops once their sum less MISSES exceeds
+    ``bound``."""
     M = ab.shape[0]
     n = _score(ab, rho0, x, 0.0, short)[1] * (M + 1)
     if n > bound or geo[0].shape[0] == 0:
-        return n
+        return n, 0
     for j in range(M):
         if kept[j] == kept[j] and not _sees(geo, x, ab, j, False):
             n += 1
             if n > bound:
-                return n
+                return n, 0
     miss = 0
     for j in range(M):
         if (kept[j] != kept[j] and rho0[j] - _distance(x, ab[j]) > long
@@ -789,7 +842,7 @@ def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragm
             miss += 1
             if n + miss - MISSES > bound:
                 break
-    return n + max(miss - MISSES, 0)
+    return n, miss
 
 
 @numba.njit(cache=True, inline="always")

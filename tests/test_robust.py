@@ -743,3 +743,47 @@ def test_direct_ranges_from_ceiling_anchors_are_found_below_the_ceiling():
     # within the anchors' mounting error (3 cm) of the tag
     assert np.all(np.linalg.norm(fix.x - tags, axis=1) < 0.1)
     assert np.array_equal(fix.used, direct)
+
+
+# two aisle nodes of the warehouse that see 4 anchors in line of sight (one realization
+# each of the sweep's M = 20 layout): the direct set of the first includes the anchor
+# 12.4 m away at the far wall, which comes late in the order of the ranges
+WAREHOUSE_FOUR = [
+    ([4.0, 1.0, 1.8], [5.49, 6.419, 13.03, 12.395, 16.416, 8.507, 6.046, 8.309, 3.909, 4.851,
+                       10.017, 9.57, 9.727, 11.957, 13.673, 13.167, 6.346, 10.862, 7.767,
+                       11.14]),
+    ([11.0, 2.5, 0.5], [7.553, 11.663, 16.634, 7.388, 12.102, 12.039, 9.458, 11.05, 7.235,
+                        6.404, 7.569, 4.746, 6.465, 13.933, 12.155, 6.269, 10.452, 19.375,
+                        9.508, 8.12]),
+]  # fmt: skip
+# the L-shaped lab's recommended layout and a tag of its field check that sees 4 anchors:
+# the other four ranges are echoes, and a set with two of them agrees at the floor
+L_LAB_8 = np.array(
+    [[5.042, 0.03, 2.235], [6.97, 1.132, 0.398], [5.37, 2.97, 1.5], [0.03, 2.406, 0.398],
+     [0.03, 4.386, 1.132], [0.03, 4.386, 2.97], [1.187, 3.594, 2.97], [6.584, 0.822, 2.97]]
+)  # fmt: skip
+L_LAB_TAG = ([2.95, 1.012, 1.335], [2.467, 4.127, 3.114, 4.595, 6.158, 6.342, 5.2, 4.018])
+
+
+@pytest.mark.parametrize("room_file", ["warehouse-aisles", "l-shaped-lab"])
+def test_tags_that_see_four_anchors_get_the_direct_set(room_file):
+    """Where a tag sees exactly 4 anchors, the fix is a minimal set that nothing
+    contradicts, and a wrong one can agree as well as the direct one (T has one degree of
+    freedom): a set whose fix the map says another anchor sees with a long range, or whose
+    fix the room's boundary holds (a mirror image's mark), ranks below one that passes the
+    test cleanly, and the search goes on past such a set. Before, these fixes were
+    0.29 m, 3.8 m and 1.8 m off (the last held on the floor)."""
+    room = Room.from_toml(Path(__file__).resolve().parents[1] / f"examples/{room_file}.toml")
+    if room_file == "warehouse-aisles":
+        anchors, cases = WAREHOUSE_20, WAREHOUSE_FOUR
+    else:
+        anchors, cases = L_LAB_8, [L_LAB_TAG]
+    tags = np.array([t for t, _ in cases])
+    ranges = np.array([r for _, r in cases])
+    fix = Positioning(method="robust", keep_in_room=True).locate(
+        room, anchors, ranges, full_output=True
+    )
+    direct = np.abs(ranges - np.linalg.norm(anchors - tags[:, None], axis=-1)) < 0.05
+    assert np.all(direct.sum(axis=1) == 4)
+    assert np.all(np.linalg.norm(fix.x - tags, axis=1) < 0.05)
+    assert np.array_equal(fix.used, direct)
