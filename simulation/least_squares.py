@@ -335,16 +335,18 @@ def linear_flatness(ab, rho, x, coplanar) -> float:  # pragma: no cover - compil
 
 
 @numba.njit(cache=True)
-def mirror_fixes(ab, rho, x, y) -> bool:  # pragma: no cover - compiled
+def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     """x (3,) and y (3,) the two positions that the ranges rho (M,) of coplanar anchors ab
     (M, 3) (NaN: not heard; at least 3 heard, not collinear) fix, mirror images of each
     other in the anchors' plane (docs/model.md, "Positioning that rejects echoes"): the
     squared-range differences fix the position's projection onto the plane (the normal
     equations S p = g of :func:`linear_fix` with the component along the plane's normal n,
     the null direction of S, held at the plane), and the mean squared range its distance h
-    from the plane, x = p + h n, y = p − h n (h = 0 where the ranges are too short to
-    reach off the plane). False, x and y untouched, with fewer than 3 heard or collinear
-    anchors."""
+    from the plane, x = p + h n, y = p − h n, h at least ``least`` (m): where the ranges
+    barely reach off the plane (noise, or anchors mounted off their plan), the images are
+    put that far off it, since a least-squares fit started on the plane cannot leave it
+    (the plane is a symmetry of the fit). False, x and y untouched, with fewer than 3 heard
+    or collinear anchors."""
     k, S, g, m, mr2 = _normal_equations(ab, rho)
     if k < 3:
         return False
@@ -374,7 +376,7 @@ def mirror_fixes(ab, rho, x, y) -> bool:  # pragma: no cover - compiled
     for j in range(ab.shape[0]):
         if rho[j] == rho[j]:
             q += (p[0] - ab[j, 0]) ** 2 + (p[1] - ab[j, 1]) ** 2 + (p[2] - ab[j, 2]) ** 2
-    h = math.sqrt(max(mr2 - q / k, 0.0))
+    h = math.sqrt(max(mr2 - q / k, least * least))
     x[0], x[1], x[2] = p[0] + h * n0, p[1] + h * n1, p[2] + h * n2
     y[0], y[1], y[2] = p[0] - h * n0, p[1] - h * n1, p[2] - h * n2
     return True

@@ -165,6 +165,10 @@ COPLANAR = 1e-12
 #: nearly coplanar (three on the ceiling, one a little below) that the linear solution
 #: can be decimetres off; it is polished by least squares on the set's ranges
 FLAT = 1e-3
+#: the least distance of a coplanar minimal set's mirror images from the anchors' plane
+#: (:func:`simulation.least_squares.mirror_fixes`): a fit polished from there reaches the
+#: side's least-squares fix; from the plane itself it cannot leave the plane
+OFF_PLANE = 0.1
 #: a fix within HELD m of the room's boundary is held there by the bounds (:func:`_held`)
 HELD = 1e-6
 #: what a forgiven miss adds to the T of a minimal set's fix in their ranking: −2 ln of the
@@ -569,15 +573,17 @@ def _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool:
     """xt (3,) the fix of a minimal set of coplanar anchors (its ranges in trial (M,)),
     which have no linear solution off their plane: of the two mirror images in their plane
     (:func:`mirror_fixes`), each moved into the box [lo, hi] and the floor plan ``poly``,
-    the one that fewer ranges of rho0 (M,) contradict, then with more inliers
-    (:func:`_score`), then that moved less (anchors on a ceiling or a wall put one image
-    outside the room) (xm (3,): scratch). False: the anchors are collinear."""
-    if not mirror_fixes(ab, trial, xt, xm):
+    the one that fewer ranges of rho0 (M,) contradict, then not moved by more than
+    ``loose`` m (anchors on a ceiling or a wall put one image outside the room, and moved
+    into it that image fits its ranges no more), then with more inliers (:func:`_score`),
+    then that moved less (xm (3,): scratch). False: the anchors are collinear."""
+    if not mirror_fixes(ab, trial, xt, xm, OFF_PLANE):
         return False
     out_t, out_m = _outside(xt, lo, hi, poly), _outside(xm, lo, hi, poly)
     in_t, short_t = _score(ab, rho0, xt, loose, max(loose, short))
     in_m, short_m = _score(ab, rho0, xm, loose, max(loose, short))
-    if (short_m, -in_m, out_m) < (short_t, -in_t, out_t):
+    # an image moved into the room by more than ``loose`` no longer fits the set's ranges
+    if (short_m, out_m > loose, -in_m, out_m) < (short_t, out_t > loose, -in_t, out_t):
         xt[:] = xm
     return True
 

@@ -676,7 +676,8 @@ def test_a_direct_range_left_out_is_added_back_and_an_echo_within_reach_is_not()
 def test_the_mirror_images_of_coplanar_anchors_fit_their_ranges():
     """Ranges from anchors in one plane (a ceiling, a tilted plane) fix a position only up
     to its mirror image in that plane: both images fit every range (closed form), one is
-    the node; collinear anchors or fewer than 3 fix no plane."""
+    the node; ranges too short to reach off the plane put the images the least distance
+    asked for off it, on either side; collinear anchors or fewer than 3 fix no plane."""
     from simulation.least_squares import linear_fix, mirror_fixes
 
     rng = np.random.default_rng(21)
@@ -692,15 +693,19 @@ def test_the_mirror_images_of_coplanar_anchors_fit_their_ranges():
             rho = np.linalg.norm(a - x, axis=1)
             p, q = np.empty(3), np.empty(3)
             assert not linear_fix(a, rho, p, 1e-12)  # no linear solution off the plane
-            assert mirror_fixes(a, rho, p, q)
+            assert mirror_fixes(a, rho, p, q, 0.1)
             for y in (p, q):
                 assert np.allclose(np.linalg.norm(a - y, axis=1), rho, atol=1e-6)
             assert min(np.linalg.norm(p - x), np.linalg.norm(q - x)) < 1e-6
             assert np.isclose(p @ normal + q @ normal, 2 * a[0] @ normal)  # mirrored
+            foot = x - ((x - a[0]) @ normal) * normal  # a point of the plane
+            assert mirror_fixes(a, np.linalg.norm(a - foot, axis=1), p, q, 0.1)  # h = 0
+            assert np.isclose(abs((p - q) @ normal), 0.2)
+            assert np.isclose(p @ normal + q @ normal, 2 * a[0] @ normal)
     line = np.outer(np.linspace(0, 6, 4), [1.0, 0.5, 0.0]) + [0, 0, 3.0]
     for a in (line, line[:2]):
         rho = np.linalg.norm(a - [2, 2, 1], axis=1)
-        assert not mirror_fixes(a, rho, np.empty(3), np.empty(3))
+        assert not mirror_fixes(a, rho, np.empty(3), np.empty(3), 0.1)
 
 
 # the warehouse's 20 anchors of docs/examples/warehouse-sweep (M = 20), 12 on its ceiling
