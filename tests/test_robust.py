@@ -792,3 +792,23 @@ def test_tags_that_see_four_anchors_get_the_direct_set(room_file):
     assert np.all(direct.sum(axis=1) == 4)
     assert np.all(np.linalg.norm(fix.x - tags, axis=1) < 0.05)
     assert np.array_equal(fix.used, direct)
+
+
+def test_a_tag_that_sees_only_the_anchors_on_one_wall_is_fixed_off_the_wall():
+    """A tag 0.74 m from a wall of the L-shaped lab that sees only the 4 anchors on that
+    wall (a field check's tag, anchors mounted within 3 cm; the fifth range heard is an
+    echo): the set's mirror images lie 0.74 m either side of the wall, and the one behind
+    it, moved into the room, lies on the wall and fits the ranges no more. Before, that
+    image was taken (it had one inlier more, the echo) and the fix stayed on the wall."""
+    room = Room.from_toml(Path(__file__).resolve().parents[1] / "examples/l-shaped-lab.toml")
+    anchors = np.array(
+        [[6.97, 0.765, 1.132], [4.97, 2.97, 1.132], [0.03, 0.822, 0.398], [0.03, 2.406, 2.602],
+         [0.03, 4.386, 0.765], [0.03, 4.386, 2.235], [5.428, 2.406, 2.97], [5.813, 0.426, 2.97]]
+    )  # fmt: skip
+    tag = np.array([0.738, 5.594, 1.204])
+    ranges = np.array([np.nan, np.nan, 4.901, 3.554, 1.468, 1.757, np.nan, 8.056])
+    fix = Positioning(method="robust", keep_in_room=True).locate(
+        room, anchors, ranges, full_output=True
+    )
+    assert np.linalg.norm(fix.x - tag) < 0.05
+    assert np.array_equal(np.flatnonzero(fix.used), [2, 3, 4, 5])
