@@ -491,7 +491,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
             four_short, four_ev, four_T, iters, four_st = _settle(
                 ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x,
                 four_short, four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol,
-                ftol, gtol, sigma, thr, short, loose, work, geo,
+                ftol, gtol, sigma, short, loose, work, geo,
             )  # fmt: skip
             npend = 0
         if t >= HYPOTHESES and (best_short == 0 or (t >= FOUR_HYPOTHESES and four_short == 0
@@ -509,7 +509,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         elif best_short > 0 and nshort <= four_short:
             four_short, four_ev, four_T, iters, four_st = _minimal(
                 ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters,
-                lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work,
+                lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
                 geo,
             )  # fmt: skip
         if inl >= 5 and _better(nshort, inl, best_short, best_in):
@@ -529,7 +529,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
     four_short, four_ev, four_T, iters, four_st = _settle(
         ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
         four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
-        thr, short, loose, work, geo,
+        short, loose, work, geo,
     )  # fmt: skip
     return _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st,
                      four, four_x, four_short, four_ev, four_T, four_st, used, fst, trial, short,
@@ -606,9 +606,10 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
     """The end of step 4 where no 5 anchors agree without a contradiction: the fix is the
     best refined set of 5 that something contradicts (best_x (3,), its contradictions,
     anchors, T and status), else the fix so far x (3,) (its T, n anchors ``used`` (M,));
-    the best minimal set (its ranges in four (M,), fix four_x (3,), contradictions, T and
-    status) replaces it when its 4 ranges agree and it is less contradicted, or as little
-    and with a smaller T (``trial`` (M,): scratch). Returns (T, n, iterations)."""
+    the best minimal set (its ranges in four (M,), fix four_x (3,), contradictions,
+    penalty, T and status) replaces it when its 4 ranges agree and it is less contradicted,
+    or as little and with a smaller T plus penalty (:func:`_ranked`, in the box [lo, hi] and
+    the floor plan ``poly``; ``trial`` (M,): scratch). Returns (T, n, iterations)."""
     if best_in >= 5:
         now, T, n, ev = best_short, best_T, best_in, 0.0  # a set of 5 that something contradicts
         x[:] = best_x
@@ -696,12 +697,13 @@ def _promising(ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, b
 @numba.njit(cache=True)
 def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
             four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
-            sigma, thr, short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
+            sigma, short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
     """The minimal sets put off by :func:`_consensus` (their anchors pend (K, 4), linear
     fixes pend_x (K, 3) and short-range counts pend_short (K,), the first ``npend``), each
     passed to :func:`_minimal` in the order they were met when its short ranges are no more
     than the best's so far, as the search would have done on meeting them (``xt``,
-    ``trial``: scratch); returns the best's (contradictions, T, iterations, status)."""
+    ``trial``: scratch); returns the best's (contradictions, penalty, T, iterations,
+    status)."""
     for p in range(npend):
         if pend_short[p] > four_short:
             continue
@@ -711,19 +713,20 @@ def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four
         xt[:] = pend_x[p]
         four_short, four_ev, four_T, iters, four_st = _minimal(
             ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters, lo,
-            hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work, geo,
+            hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
         )  # fmt: skip
     return four_short, four_ev, four_T, iters, four_st
 
 
 @numba.njit(cache=True)
 def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters,
-             lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, short, loose, work,
+             lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
              geo):  # fmt: skip  # pragma: no cover
     """A minimal set (its ranges in trial (M,), its linear fix in xt (3,)) solved by least
     squares from xt into the scratch xm (3,); kept in four (M,) and four_x (3,) when it has
-    fewer contradictions than the best minimal set so far, or as few and a smaller T;
-    returns the best's (contradictions, T, iterations, the status of its solve)."""
+    fewer contradictions than the best minimal set so far, or as few and a smaller T plus
+    penalty (:func:`_ranked`); returns the best's (contradictions, penalty, T, iterations,
+    the status of its solve)."""
     xm[:] = xt
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
