@@ -708,7 +708,8 @@ def test_the_mirror_images_of_coplanar_anchors_fit_their_ranges():
         assert not mirror_fixes(a, rho, np.empty(3), np.empty(3), 0.1)
 
 
-# the warehouse's 20 anchors of docs/examples/warehouse-sweep (M = 20), 12 on its ceiling
+# the 20 anchors the warehouse sweep planned at M = 20 before the examples were planned again
+# (docs/benchmarks/robust/warehouse-geometry/sweep-M20-layout.json), 12 on its ceiling
 WAREHOUSE_20 = np.array(
     [[9.04, 0.03, 3.73], [0.03, 3.34, 4.35], [0.03, 9.31, 1.26], [15.97, 1.36, 4.97],
      [15.97, 9.31, 3.73], [2.11, 6.66, 4.97], [2.8, 4.01, 4.97], [3.5, 6.66, 4.97],
