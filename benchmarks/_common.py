@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 # Run from a checkout without installing: make the top-level packages importable.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -64,6 +66,25 @@ def with_room_chirp(system, own):
         return system
     shift = own.chirp.duration - system.chirp.duration
     return system.with_signal(duration=own.chirp.duration, t_wake=system.receiver.t_wake + shift)
+
+
+def field_draws(room, anchors, system, draws: int) -> np.ndarray:
+    """(2, 300 draws) the field errors (m) of ``anchors`` and whether each fix is verified:
+    ``draws`` draws of the field check (300 random tags in the zones, anchors mounted within
+    3 cm, one noise realization, the streams of seed 7; ``placement.validation.field_errors``)."""
+    from placement.validation import field_errors
+
+    return np.concatenate([field_errors(room, anchors, 300, 0.03, d, 7, system=system)
+                           for d in range(draws)], axis=1)  # fmt: skip
+
+
+def error_summary(e: np.ndarray) -> dict:
+    """Median, mean, P95 and RMS (m) of the finite errors e (an empty dict: none finite)."""
+    e = e[np.isfinite(e)]
+    if e.size == 0:
+        return {}
+    return {"median": float(np.median(e)), "mean": float(e.mean()),
+            "p95": float(np.percentile(e, 95)), "rms": float(np.sqrt(np.mean(e * e)))}  # fmt: skip
 
 
 def emit(name: str, **fields) -> None:

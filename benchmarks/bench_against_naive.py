@@ -20,10 +20,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-from _common import emit, room_and_system, room_parser
+from _common import emit, error_summary, field_draws, room_and_system, room_parser
 
 from placement import naive_layout
-from placement.validation import field_errors
 
 
 def main() -> None:
@@ -37,17 +36,15 @@ def main() -> None:
                "corners": room.corners_layout()}  # fmt: skip
     rms = {}
     for name, a in layouts.items():
-        E = np.concatenate([field_errors(room, a, 300, 0.03, d, 7, system=system)
-                            for d in range(args.draws)], axis=1)  # fmt: skip
-        e = E[0][np.isfinite(E[0])]
-        if e.size == 0:  # no tag has a fix (e.g. corners beyond the signal's reach)
+        E = field_draws(room, a, system, args.draws)
+        summary = error_summary(E[0])
+        if not summary:  # no tag has a fix (e.g. corners beyond the signal's reach)
             emit("against_naive", room=room.name, system=system.name, layout=name, M=len(a),
                  fixes=int(E[0].size), found=0)  # fmt: skip
             continue
-        rms[name] = float(np.sqrt(np.mean(e * e)))
+        rms[name] = summary["rms"]
         emit("against_naive", room=room.name, system=system.name, layout=name, M=len(a),
-             median=float(np.median(e)), mean=float(e.mean()), p95=float(np.percentile(e, 95)),
-             rms=rms[name], verified=float(np.mean(E[1] > 0)),
+             **summary, verified=float(np.mean(E[1] > 0)),
              rms_reduction_by_plan=1 - rms["planned"] / rms[name])  # fmt: skip
 
 
