@@ -731,6 +731,10 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T,
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
+    if four_short == 0 and Tm >= four_T + four_ev:
+        # the best so far is uncontradicted and its T plus penalty no larger: contradictions
+        # and penalty only add, so this set cannot rank before it (the map is not read)
+        return four_short, four_ev, four_T, iters + it, four_st
     nshort, ev = _ranked(ab, rho0, trial, xm, short, loose, geo, four_short, lo, hi, poly)
     if (nshort, Tm + ev) < (four_short, four_T + four_ev):
         four[:] = trial
