@@ -255,53 +255,53 @@ def nearest_on_boundary(x, y, poly):  # pragma: no cover - compiled
     return best, bx, by
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _normal_equations(ab, rho):  # pragma: no cover - compiled
     """The normal equations S x = g of the heard anchors' squared-range differences
     (:func:`linear_fix`) for anchors ab (M, 3) and ranges rho (M,) (NaN: not heard):
     (n heard, S as (s00, s01, s02, s11, s12, s22), g (3,), the anchors' centroid (3,),
-    the mean squared range)."""
+    the mean squared range), in tuples: the robust search solves one for every minimal
+    set, and arrays would be allocated each time."""
     n = 0
-    m = np.zeros(3)
-    ma2 = mr2 = 0.0
+    m0 = m1 = m2 = ma2 = mr2 = 0.0
     for j in range(ab.shape[0]):
         if rho[j] == rho[j]:
             n += 1
-            m += ab[j]
+            m0 += ab[j, 0]
+            m1 += ab[j, 1]
+            m2 += ab[j, 2]
             ma2 += ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2
             mr2 += rho[j] * rho[j]
-    S, g = np.zeros(6), np.zeros(3)
-    if n == 0:
-        return n, S, g, m, mr2
-    m, ma2, mr2 = m / n, ma2 / n, mr2 / n
+    s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
+    if n > 0:
+        m0, m1, m2, ma2, mr2 = m0 / n, m1 / n, m2 / n, ma2 / n, mr2 / n
     for j in range(ab.shape[0]):
         if rho[j] == rho[j]:
-            c0, c1, c2 = 2 * (ab[j, 0] - m[0]), 2 * (ab[j, 1] - m[1]), 2 * (ab[j, 2] - m[2])
+            c0, c1, c2 = 2 * (ab[j, 0] - m0), 2 * (ab[j, 1] - m1), 2 * (ab[j, 2] - m2)
             rhs = (ab[j, 0] ** 2 + ab[j, 1] ** 2 + ab[j, 2] ** 2 - ma2) - (rho[j] * rho[j] - mr2)
-            S[0] += c0 * c0
-            S[1] += c0 * c1
-            S[2] += c0 * c2
-            S[3] += c1 * c1
-            S[4] += c1 * c2
-            S[5] += c2 * c2
-            g[0] += c0 * rhs
-            g[1] += c1 * rhs
-            g[2] += c2 * rhs
-    return n, S, g, m, mr2
+            s00 += c0 * c0
+            s01 += c0 * c1
+            s02 += c0 * c2
+            s11 += c1 * c1
+            s12 += c1 * c2
+            s22 += c2 * c2
+            g0 += c0 * rhs
+            g1 += c1 * rhs
+            g2 += c2 * rhs
+    return n, (s00, s01, s02, s11, s12, s22), (g0, g1, g2), (m0, m1, m2), mr2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _cofactors(S):  # pragma: no cover - compiled
     """The cofactors (c00, c01, c02, c11, c12, c22) of the symmetric 3 × 3 matrix S
     (s00, s01, s02, s11, s12, s22) and its determinant."""
-    s00, s01, s02, s11, s12, s22 = S[0], S[1], S[2], S[3], S[4], S[5]
-    c = np.empty(6)
-    c[0], c[1], c[2] = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c[3], c[4], c[5] = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+    s00, s01, s02, s11, s12, s22 = S
+    c = (s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11,
+         s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01)  # fmt: skip
     return c, s00 * c[0] + s01 * c[1] + s02 * c[2]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _cofactor_solve(c, det, g, x) -> None:  # pragma: no cover - compiled
     """x (3,) = S⁻¹ g from the cofactors c and determinant of S (:func:`_cofactors`)."""
     x[0] = (c[0] * g[0] + c[1] * g[1] + c[2] * g[2]) / det
@@ -365,18 +365,18 @@ def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     n0, n1, n2 = n0 / size, n1 / size, n2 / size
     # (S + tr n nᵀ) p = g + tr n (n · m): p on the plane through the centroid m
     off = tr * (n0 * m[0] + n1 * m[1] + n2 * m[2])
-    T = np.array([S[0] + tr * n0 * n0, S[1] + tr * n0 * n1, S[2] + tr * n0 * n2,
-                  S[3] + tr * n1 * n1, S[4] + tr * n1 * n2, S[5] + tr * n2 * n2])  # fmt: skip
+    T = (S[0] + tr * n0 * n0, S[1] + tr * n0 * n1, S[2] + tr * n0 * n2,
+         S[3] + tr * n1 * n1, S[4] + tr * n1 * n2, S[5] + tr * n2 * n2)  # fmt: skip
     cT, det = _cofactors(T)
     if not det > 0.0:
         return False
-    p = np.empty(3)
-    _cofactor_solve(cT, det, np.array([g[0] + off * n0, g[1] + off * n1, g[2] + off * n2]), p)
+    _cofactor_solve(cT, det, (g[0] + off * n0, g[1] + off * n1, g[2] + off * n2), y)  # p
+    p0, p1, p2 = y[0], y[1], y[2]
     q = 0.0  # the mean squared distance of p from the anchors heard
     for j in range(ab.shape[0]):
         if rho[j] == rho[j]:
-            q += (p[0] - ab[j, 0]) ** 2 + (p[1] - ab[j, 1]) ** 2 + (p[2] - ab[j, 2]) ** 2
+            q += (p0 - ab[j, 0]) ** 2 + (p1 - ab[j, 1]) ** 2 + (p2 - ab[j, 2]) ** 2
     h = math.sqrt(max(mr2 - q / k, least * least))
-    x[0], x[1], x[2] = p[0] + h * n0, p[1] + h * n1, p[2] + h * n2
-    y[0], y[1], y[2] = p[0] - h * n0, p[1] - h * n1, p[2] - h * n2
+    x[0], x[1], x[2] = p0 + h * n0, p1 + h * n1, p2 + h * n2
+    y[0], y[1], y[2] = p0 - h * n0, p1 - h * n1, p2 - h * n2
     return True

@@ -36,11 +36,11 @@ schemes (Casas et al., 2006):
    all the others (its excess bounded as in step 1 above :data:`SHORT`), each
    solved from the linear solution of its squared-range differences (:func:`_minimal_fix`:
    coplanar anchors fix two mirror images in their plane, the better is taken; nearly
-   coplanar ones, :data:`FLAT`, a solution polished by least squares); a hypothesis is
-   scored by its contradictions (ranges shorter than its distance by more than
-   :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one better than the best
-   so far is refined by least squares on its inliers, then on those within 3σ of the
-   refined fix; the first refined set of 5 or more that passes the test with no
+   coplanar ones, :data:`FLAT`, a solution polished by :data:`POLISH_ITER` iterations of
+   least squares); a hypothesis is scored by its contradictions (ranges shorter than its
+   distance by more than :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one
+   better than the best so far is refined by least squares on its inliers, then on those
+   within 3σ of the refined fix; the first refined set of 5 or more that passes the test with no
    contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, up to
    :data:`FOUR_HYPOTHESES` while only a minimal set agrees uncontradicted and passes the
    test unpenalized (below), and up to :data:`MORE_HYPOTHESES` while every set so far is
@@ -181,6 +181,10 @@ HELD_PENALTY = 10.8
 #: the iterations of one dropping step's or one refinement's solve: from a good start a
 #: consistent set converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
+#: the iterations that polish a nearly coplanar minimal set's linear solution
+#: (:data:`FLAT`) before it is scored: its inliers and short ranges need it within
+#: decimetres, not converged; a set that is ranked is solved in full (:func:`_minimal`)
+POLISH_ITER = 2
 
 
 @functools.lru_cache(maxsize=64)
@@ -548,16 +552,17 @@ def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xt
                  loose, short, work) -> int:  # fmt: skip  # pragma: no cover - compiled
     """xt (3,) the fix of a minimal set (its ranges in trial (M,)) in the box [lo, hi]: the
     linear solution of its squared-range differences; where its anchors are nearly
-    coplanar (:data:`FLAT`), that solution polished by least squares on the set's ranges
-    (off their plane it is ill-conditioned); where they are coplanar, the better of the
-    two mirror images (:func:`_mirror_fix`); where they are collinear, solved from the fit
-    so far x (3,) (xm (3,): scratch). Returns the iterations of the solves."""
+    coplanar (:data:`FLAT`), that solution polished by :data:`POLISH_ITER` iterations of
+    least squares on the set's ranges (off their plane it is ill-conditioned); where they
+    are coplanar, the better of the two mirror images (:func:`_mirror_fix`); where they are
+    collinear, solved from the fit so far x (3,) (xm (3,): scratch). Returns the
+    iterations of the solves."""
     iters = 0
     flat = linear_flatness(ab, trial, xt, COPLANAR)
     if flat > COPLANAR:
         if flat <= FLAT:  # nearly coplanar: polished
             _outside(xt, lo, hi, poly)
-            iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+            iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, POLISH_ITER),
                              xtol, ftol, gtol, *work)[2]  # fmt: skip
     elif not _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short):
         xt[:] = x  # collinear: from the fit so far
