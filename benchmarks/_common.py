@@ -69,10 +69,10 @@ def with_room_chirp(system, own):
 
 
 def field_draws(room, anchors, system, draws: int) -> np.ndarray:
-    """(2, 300 draws) the field errors (m) of ``anchors`` and whether each fix is verified (1.0,
-    else 0.0):
-    ``draws`` draws of the field check (300 random tags in the zones, anchors mounted within
-    3 cm, one noise realization, the streams of seed 7; ``placement.validation.field_errors``)."""
+    """(2, 300 draws) the field errors (m) of ``anchors`` and whether each fix is verified
+    (1.0, else 0.0): ``draws`` draws of the field check (300 random tags in the zones,
+    anchors mounted within 3 cm, one noise realization, the streams of seed 7;
+    ``placement.validation.field_errors``)."""
     from placement.validation import field_errors
 
     return np.concatenate([field_errors(room, anchors, 300, 0.03, d, 7, system=system)

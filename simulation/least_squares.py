@@ -370,7 +370,8 @@ def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     cT, det = _cofactors(T)
     if not det > 0.0:
         return False
-    _cofactor_solve(cT, det, (g[0] + off * n0, g[1] + off * n1, g[2] + off * n2), y)  # p
+    # p is solved into y, which holds it only until the images are written below
+    _cofactor_solve(cT, det, (g[0] + off * n0, g[1] + off * n1, g[2] + off * n2), y)
     p0, p1, p2 = y[0], y[1], y[2]
     q = 0.0  # the mean squared distance of p from the anchors heard
     for j in range(ab.shape[0]):

@@ -40,8 +40,8 @@ schemes (Casas et al., 2006):
    least squares); a hypothesis is scored by its contradictions (ranges shorter than its
    distance by more than :data:`SHORT`) and its inliers (ranges within :data:`LOOSE`); one
    better than the best so far is refined by least squares on its inliers, then on those
-   within 3σ of the refined fix; the first refined set of 5 or more that passes the test with no
-   contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, up to
+   within 3σ of the refined fix; the first refined set of 5 or more that passes the test
+   with no contradiction ends the search (at most :data:`HYPOTHESES` minimal sets, up to
    :data:`FOUR_HYPOTHESES` while only a minimal set agrees uncontradicted and passes the
    test unpenalized (below), and up to :data:`MORE_HYPOTHESES` while every set so far is
    contradicted or penalized: in a hall of racks the few direct ranges may be among the
