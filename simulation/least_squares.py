@@ -256,7 +256,7 @@ def nearest_on_boundary(x, y, poly):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def _normal_equations(ab, rho):  # pragma: no cover - compiled
+def normal_equations(ab, rho):  # pragma: no cover - compiled
     """The normal equations S x = g of the heard anchors' squared-range differences
     (:func:`linear_fix`) for anchors ab (M, 3) and ranges rho (M,) (NaN: not heard):
     (n heard, S as (s00, s01, s02, s11, s12, s22), g (3,), the anchors' centroid (3,),
@@ -292,7 +292,21 @@ def _normal_equations(ab, rho):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def _cofactors(S):  # pragma: no cover - compiled
+def gram(u):  # pragma: no cover - compiled
+    """S = Σ_j u_j u_jᵀ of the rows of u (M, 3) as (s00, s01, s02, s11, s12, s22)."""
+    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
+    for j in range(u.shape[0]):
+        s00 += u[j, 0] * u[j, 0]
+        s01 += u[j, 0] * u[j, 1]
+        s02 += u[j, 0] * u[j, 2]
+        s11 += u[j, 1] * u[j, 1]
+        s12 += u[j, 1] * u[j, 2]
+        s22 += u[j, 2] * u[j, 2]
+    return s00, s01, s02, s11, s12, s22
+
+
+@numba.njit(cache=True, inline="always")
+def cofactors(S):  # pragma: no cover - compiled
     """The cofactors (c00, c01, c02, c11, c12, c22) of the symmetric 3 × 3 matrix S
     (s00, s01, s02, s11, s12, s22) and its determinant."""
     s00, s01, s02, s11, s12, s22 = S
@@ -303,7 +317,7 @@ def _cofactors(S):  # pragma: no cover - compiled
 
 @numba.njit(cache=True, inline="always")
 def _cofactor_solve(c, det, g, x) -> None:  # pragma: no cover - compiled
-    """x (3,) = S⁻¹ g from the cofactors c and determinant of S (:func:`_cofactors`)."""
+    """x (3,) = S⁻¹ g from the cofactors c and determinant of S (:func:`cofactors`)."""
     x[0] = (c[0] * g[0] + c[1] * g[1] + c[2] * g[2]) / det
     x[1] = (c[1] * g[0] + c[3] * g[1] + c[4] * g[2]) / det
     x[2] = (c[2] * g[0] + c[4] * g[1] + c[5] * g[2]) / det
@@ -315,18 +329,18 @@ def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
     normal equations S x = g, solved by cofactors) for anchors ab (M, 3) and ranges rho
     (M,) (NaN: not heard); False, x untouched, with fewer than 4 heard or when they are
     coplanar (det S ≤ ``coplanar`` · (tr S)³)."""
-    return linear_flatness(ab, rho, x, coplanar) > coplanar
+    return flatness(normal_equations(ab, rho), x, coplanar) > coplanar
 
 
 @numba.njit(cache=True)
-def linear_flatness(ab, rho, x, coplanar) -> float:  # pragma: no cover - compiled
-    """det S / (tr S)³ of the normal equations of :func:`linear_fix` (0 for anchors in a
-    plane, −1 with fewer than 4 heard), x (3,) their solution where it exceeds
+def flatness(eq, x, coplanar) -> float:  # pragma: no cover - compiled
+    """det S / (tr S)³ of the normal equations ``eq`` (:func:`normal_equations`; 0 for
+    anchors in a plane, −1 with fewer than 4 heard), x (3,) their solution where it exceeds
     ``coplanar`` (else x untouched)."""
-    n, S, g, _, _ = _normal_equations(ab, rho)
+    n, S, g, _, _ = eq
     if n < 4:
         return -1.0
-    c, det = _cofactors(S)
+    c, det = cofactors(S)
     tr = S[0] + S[3] + S[5]
     flat = det / (tr * tr * tr) if tr > 0.0 else 0.0
     if flat > coplanar:
@@ -347,10 +361,17 @@ def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     put that far off it, since a least-squares fit started on the plane cannot leave it
     (the plane is a symmetry of the fit). False, x and y untouched, with fewer than 3 heard
     or collinear anchors."""
-    k, S, g, m, mr2 = _normal_equations(ab, rho)
+    return mirrors(normal_equations(ab, rho), ab, rho, x, y, least)
+
+
+@numba.njit(cache=True)
+def mirrors(eq, ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
+    """:func:`mirror_fixes` from the normal equations ``eq`` of ab (M, 3) and rho (M,)
+    (:func:`normal_equations`), which the caller may have built already."""
+    k, S, g, m, mr2 = eq
     if k < 3:
         return False
-    c, _ = _cofactors(S)
+    c, _ = cofactors(S)
     # the null direction of a rank-2 S: its adjugate's largest row
     rows = ((c[0], c[1], c[2]), (c[1], c[3], c[4]), (c[2], c[4], c[5]))
     n0, n1, n2, best = 0.0, 0.0, 0.0, 0.0
@@ -367,7 +388,7 @@ def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     off = tr * (n0 * m[0] + n1 * m[1] + n2 * m[2])
     T = (S[0] + tr * n0 * n0, S[1] + tr * n0 * n1, S[2] + tr * n0 * n2,
          S[3] + tr * n1 * n1, S[4] + tr * n1 * n2, S[5] + tr * n2 * n2)  # fmt: skip
-    cT, det = _cofactors(T)
+    cT, det = cofactors(T)
     if not det > 0.0:
         return False
     # p is solved into y, which holds it only until the images are written below

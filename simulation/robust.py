@@ -98,12 +98,15 @@ import numba
 import numpy as np
 
 from simulation.least_squares import (
+    cofactors,
+    flatness,
+    gram,
     into_floor_plan,
-    linear_flatness,
     lm_solve,
     lm_solve_inline,
-    mirror_fixes,
+    mirrors,
     nearest_on_boundary,
+    normal_equations,
     residuals,
     scratch,
 )
@@ -558,13 +561,14 @@ def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xt
     collinear, solved from the fit so far x (3,) (xm (3,): scratch). Returns the
     iterations of the solves."""
     iters = 0
-    flat = linear_flatness(ab, trial, xt, COPLANAR)
+    eq = normal_equations(ab, trial)  # built once: a coplanar set's mirror images need it too
+    flat = flatness(eq, xt, COPLANAR)
     if flat > COPLANAR:
         if flat <= FLAT:  # nearly coplanar: polished
             _outside(xt, lo, hi, poly)
             iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, POLISH_ITER),
                              xtol, ftol, gtol, *work)[2]  # fmt: skip
-    elif not _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short):
+    elif not _mirror_fix(eq, ab, rho0, trial, xt, xm, lo, hi, poly, loose, short):
         xt[:] = x  # collinear: from the fit so far
         iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER), xtol,
                          ftol, gtol, *work)[2]  # fmt: skip
@@ -573,16 +577,17 @@ def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xt
 
 
 @numba.njit(cache=True)
-def _mirror_fix(ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool:
+def _mirror_fix(eq, ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool:
     # pragma: no cover - compiled
-    """xt (3,) the fix of a minimal set of coplanar anchors (its ranges in trial (M,)),
-    which have no linear solution off their plane: of the two mirror images in their plane
-    (:func:`mirror_fixes`), each moved into the box [lo, hi] and the floor plan ``poly``,
-    the one that fewer ranges of rho0 (M,) contradict, then not moved by more than
+    """xt (3,) the fix of a minimal set of coplanar anchors (its ranges in trial (M,), its
+    normal equations ``eq``), which have no linear solution off their plane: of the two
+    mirror images in their plane (:func:`simulation.least_squares.mirror_fixes`), each
+    moved into the box [lo, hi] and the floor plan ``poly``, the one that fewer ranges of
+    rho0 (M,) contradict, then not moved by more than
     ``loose`` m (anchors on a ceiling or a wall put one image outside the room, and moved
     into it that image fits its ranges no more), then with more inliers (:func:`_score`),
     then that moved less (xm (3,): scratch). False: the anchors are collinear."""
-    if not mirror_fixes(ab, trial, xt, xm, OFF_PLANE):
+    if not mirrors(eq, ab, trial, xt, xm, OFF_PLANE):
         return False
     out_t, out_m = _outside(xt, lo, hi, poly), _outside(xm, lo, hi, poly)
     in_t, short_t = _score(ab, rho0, xt, loose, max(loose, short))
@@ -925,22 +930,21 @@ def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pr
         rho[j] = rho0[j] if used[j] else np.nan
     u = work[1]
     residuals(x, ab, rho, work[0], u)  # the unit vectors U from the anchors kept to x
-    c = _cofactors(u)
-    det = c[6]
+    c, det = cofactors(gram(u))
     # √tr((UᵀU)⁻¹): inf when the anchors do not fix x (collinear)
     dop = math.sqrt((c[0] + c[3] + c[5]) / det) if det > 0 else math.inf
     if dop > DOP_MAX:
         return UNVERIFIED
-    return VERIFIED if bias * _largest_slope(rho, u, c) <= alert else UNVERIFIED
+    return VERIFIED if bias * _largest_slope(rho, u, c, det) <= alert else UNVERIFIED
 
 
 @numba.njit(cache=True)
-def _largest_slope(rho, u, c) -> float:  # pragma: no cover - compiled
+def _largest_slope(rho, u, c, det) -> float:  # pragma: no cover - compiled
     """max_j ‖k_j‖ / √(1 − h_jj) over the anchors whose range in rho (M,) is not NaN: the
     move of the fix per unit of test statistic √ΔT·σ that a bias on range j causes
-    (k_j = (UᵀU)⁻¹u_j, h_jj = u_jᵀk_j; u (M, 3) the unit vectors U to the fix, c their
-    :func:`_cofactors`); inf when they do not fix it."""
-    det = c[6]
+    (k_j = (UᵀU)⁻¹u_j, h_jj = u_jᵀk_j; u (M, 3) the unit vectors U to the fix, c and det
+    the cofactors and determinant of UᵀU, :func:`simulation.least_squares.cofactors`); inf
+    when they do not fix it."""
     if not det > 0:
         return math.inf
     worst = 0.0
@@ -958,27 +962,11 @@ def _largest_slope(rho, u, c) -> float:  # pragma: no cover - compiled
 
 @numba.njit(cache=True, inline="always")
 def _adjugate_times(c, u0, u1, u2):  # pragma: no cover - compiled
-    """adj(S) u for the :func:`_cofactors` c of the symmetric S and u = (u0, u1, u2)."""
+    """adj(S) u for the cofactors c (:func:`simulation.least_squares.cofactors`) of the
+    symmetric S and u = (u0, u1, u2)."""
     c00, c01, c02, c11, c12, c22 = c[0], c[1], c[2], c[3], c[4], c[5]
     return (c00 * u0 + c01 * u1 + c02 * u2, c01 * u0 + c11 * u1 + c12 * u2,
             c02 * u0 + c12 * u1 + c22 * u2)  # fmt: skip
-
-
-@numba.njit(cache=True, inline="always")
-def _cofactors(u):  # pragma: no cover - compiled
-    """(c00, c01, c02, c11, c12, c22, det): the cofactors and the determinant of the
-    symmetric S = Σ_j u_j u_jᵀ of the rows of u (M, 3)."""
-    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
-    for j in range(u.shape[0]):
-        s00 += u[j, 0] * u[j, 0]
-        s01 += u[j, 0] * u[j, 1]
-        s02 += u[j, 0] * u[j, 2]
-        s11 += u[j, 1] * u[j, 1]
-        s12 += u[j, 1] * u[j, 2]
-        s22 += u[j, 2] * u[j, 2]
-    c00, c01, c02 = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    c11, c12, c22 = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    return c00, c01, c02, c11, c12, c22, s00 * c00 + s01 * c01 + s02 * c02
 
 
 @numba.njit(cache=True)
@@ -986,8 +974,7 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
     """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
     the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
     residuals(x, ab, rho, r, u)
-    c = _cofactors(u)
-    det = c[6]
+    c, det = cofactors(gram(u))
     for j in range(ab.shape[0]):
         if rho[j] != rho[j]:
             score[j] = -math.inf
