@@ -48,21 +48,9 @@ def residuals(x, a, rho, r, u):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def _free_coordinates(x, r, u, lo, hi, free):  # pragma: no cover - compiled
-    """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
-    because the descent direction −Jᵀr points out of the box there."""
-    for k in range(3):
-        g = 0.0
-        for j in range(r.shape[0]):
-            g += r[j] * u[j, k]
-        free[k] = not ((x[k] <= lo[k] and g > 0) or (x[k] >= hi[k] and g < 0))
-
-
-@numba.njit(cache=True, inline="always")
-def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
-    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
-    (a held one, ``free[k]`` False, gets δ_k = 0); returns (g0, g1, g2) = Jᵀr with the held
-    coordinates' entries zero (the projected gradient)."""
+def gram_gradient(r, u):  # pragma: no cover - compiled
+    """JᵀJ as (s00, s01, s02, s11, s12, s22) and Jᵀr as (g0, g1, g2) for the residuals r
+    (M,) and their unit vectors u (M, 3) (the Jacobian's rows), in one pass."""
     s00 = s01 = s02 = s11 = s12 = s22 = g0 = g1 = g2 = 0.0
     for j in range(r.shape[0]):
         u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
@@ -75,6 +63,25 @@ def _damped_step(r, u, lam, step, free):  # pragma: no cover - compiled
         g0 += r[j] * u0
         g1 += r[j] * u1
         g2 += r[j] * u2
+    return (s00, s01, s02, s11, s12, s22), (g0, g1, g2)
+
+
+@numba.njit(cache=True, inline="always")
+def _free_coordinates(x, g, lo, hi, free):  # pragma: no cover - compiled
+    """In place: free (3,) False for each coordinate of x held at a bound of [lo, hi]
+    because the descent direction −Jᵀr (g = Jᵀr) points out of the box there."""
+    for k in range(3):
+        free[k] = not ((x[k] <= lo[k] and g[k] > 0) or (x[k] >= hi[k] and g[k] < 0))
+
+
+@numba.njit(cache=True, inline="always")
+def _damped_step(S, g, lam, step, free):  # pragma: no cover - compiled
+    """The step (3,) solving (JᵀJ + λI) δ = −Jᵀr by cofactors over the free coordinates
+    (a held one, ``free[k]`` False, gets δ_k = 0), from S = JᵀJ and g = Jᵀr
+    (:func:`gram_gradient`); returns (g0, g1, g2) = Jᵀr with the held coordinates'
+    entries zero (the projected gradient)."""
+    s00, s01, s02, s11, s12, s22 = S
+    g0, g1, g2 = g
     # a held coordinate leaves the system: its row and column become the identity's
     if not free[0]:
         s00, s01, s02, g0 = 1.0, 0.0, 0.0, 0.0
@@ -151,11 +158,16 @@ def lm_solve_inline(
     cost = residuals(x, ab, rho, r, u)
     st, it = np.int8(4 if cost == 0 else 0), 0
     lam, nu = 1e-3, 2.0
+    S, g = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    moved = True  # x moved since JᵀJ and Jᵀr were formed: a rejected step keeps them
     while st == 0 and it < max_iter:
         it += 1
-        if bounded:
-            _free_coordinates(x, r, u, lo, hi, free)
-        g0, g1, g2 = _damped_step(r, u, lam, step, free)
+        if moved:
+            S, g = gram_gradient(r, u)
+            if bounded:  # the held coordinates depend on x and Jᵀr only
+                _free_coordinates(x, g, lo, hi, free)
+            moved = False
+        g0, g1, g2 = _damped_step(S, g, lam, step, free)
         small_g = max(abs(g0), abs(g1), abs(g2)) <= gtol
         for k in range(3):
             xn[k] = x[k] + step[k]
@@ -185,6 +197,7 @@ def lm_solve_inline(
             x[:] = xn
             r, rn, u, un = rn, r, un, u  # the scratch arrays swap roles
             cost = cn
+            moved = True
             lam *= max(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
             nu = 2.0
         else:
@@ -289,20 +302,6 @@ def normal_equations(ab, rho):  # pragma: no cover - compiled
             g1 += c1 * rhs
             g2 += c2 * rhs
     return n, (s00, s01, s02, s11, s12, s22), (g0, g1, g2), (m0, m1, m2), mr2
-
-
-@numba.njit(cache=True, inline="always")
-def gram(u):  # pragma: no cover - compiled
-    """S = Σ_j u_j u_jᵀ of the rows of u (M, 3) as (s00, s01, s02, s11, s12, s22)."""
-    s00 = s01 = s02 = s11 = s12 = s22 = 0.0
-    for j in range(u.shape[0]):
-        s00 += u[j, 0] * u[j, 0]
-        s01 += u[j, 0] * u[j, 1]
-        s02 += u[j, 0] * u[j, 2]
-        s11 += u[j, 1] * u[j, 1]
-        s12 += u[j, 1] * u[j, 2]
-        s22 += u[j, 2] * u[j, 2]
-    return s00, s01, s02, s11, s12, s22
 
 
 @numba.njit(cache=True, inline="always")

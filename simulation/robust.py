@@ -100,7 +100,7 @@ import numpy as np
 from simulation.least_squares import (
     cofactors,
     flatness,
-    gram,
+    gram_gradient,
     into_floor_plan,
     lm_solve,
     lm_solve_inline,
@@ -930,7 +930,7 @@ def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pr
         rho[j] = rho0[j] if used[j] else np.nan
     u = work[1]
     residuals(x, ab, rho, work[0], u)  # the unit vectors U from the anchors kept to x
-    c, det = cofactors(gram(u))
+    c, det = cofactors(gram_gradient(work[0], u)[0])
     # √tr((UᵀU)⁻¹): inf when the anchors do not fix x (collinear)
     dop = math.sqrt((c[0] + c[3] + c[5]) / det) if det > 0 else math.inf
     if dop > DOP_MAX:
@@ -974,7 +974,7 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
     """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
     the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
     residuals(x, ab, rho, r, u)
-    c, det = cofactors(gram(u))
+    c, det = cofactors(gram_gradient(r, u)[0])
     for j in range(ab.shape[0]):
         if rho[j] != rho[j]:
             score[j] = -math.inf
