@@ -315,11 +315,18 @@ def cofactors(S):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
+def adjugate_times(c, u0, u1, u2):  # pragma: no cover - compiled
+    """adj(S) u for the cofactors c (:func:`cofactors`) of the symmetric S and
+    u = (u0, u1, u2)."""
+    return (c[0] * u0 + c[1] * u1 + c[2] * u2, c[1] * u0 + c[3] * u1 + c[4] * u2,
+            c[2] * u0 + c[4] * u1 + c[5] * u2)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
 def _cofactor_solve(c, det, g, x) -> None:  # pragma: no cover - compiled
     """x (3,) = S⁻¹ g from the cofactors c and determinant of S (:func:`cofactors`)."""
-    x[0] = (c[0] * g[0] + c[1] * g[1] + c[2] * g[2]) / det
-    x[1] = (c[1] * g[0] + c[3] * g[1] + c[4] * g[2]) / det
-    x[2] = (c[2] * g[0] + c[4] * g[1] + c[5] * g[2]) / det
+    a0, a1, a2 = adjugate_times(c, g[0], g[1], g[2])
+    x[0], x[1], x[2] = a0 / det, a1 / det, a2 / det
 
 
 @numba.njit(cache=True)

@@ -98,6 +98,7 @@ import numba
 import numpy as np
 
 from simulation.least_squares import (
+    adjugate_times,
     cofactors,
     flatness,
     gram_gradient,
@@ -951,22 +952,13 @@ def _largest_slope(rho, u, c, det) -> float:  # pragma: no cover - compiled
     for j in range(u.shape[0]):
         if rho[j] != rho[j]:
             continue
-        a0, a1, a2 = _adjugate_times(c, u[j, 0], u[j, 1], u[j, 2])
+        a0, a1, a2 = adjugate_times(c, u[j, 0], u[j, 1], u[j, 2])
         k0, k1, k2 = a0 / det, a1 / det, a2 / det
         free = 1.0 - (u[j, 0] * k0 + u[j, 1] * k1 + u[j, 2] * k2)
         if not free > 1e-12:  # the anchor alone fixes a direction: no echo on it shows
             return math.inf
         worst = max(worst, math.sqrt((k0 * k0 + k1 * k1 + k2 * k2) / free))
     return worst
-
-
-@numba.njit(cache=True, inline="always")
-def _adjugate_times(c, u0, u1, u2):  # pragma: no cover - compiled
-    """adj(S) u for the cofactors c (:func:`simulation.least_squares.cofactors`) of the
-    symmetric S and u = (u0, u1, u2)."""
-    c00, c01, c02, c11, c12, c22 = c[0], c[1], c[2], c[3], c[4], c[5]
-    return (c00 * u0 + c01 * u1 + c02 * u2, c01 * u0 + c11 * u1 + c12 * u2,
-            c02 * u0 + c12 * u1 + c22 * u2)  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -982,7 +974,7 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
         u0, u1, u2 = u[j, 0], u[j, 1], u[j, 2]
         h = 0.0
         if det > 0:
-            a0, a1, a2 = _adjugate_times(c, u0, u1, u2)
+            a0, a1, a2 = adjugate_times(c, u0, u1, u2)
             h = (u0 * a0 + u1 * a1 + u2 * a2) / det
         score[j] = r[j] * r[j] / max(1.0 - h, 1e-9)
 
