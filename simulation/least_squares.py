@@ -27,6 +27,30 @@ import math
 import numba
 import numpy as np
 
+# The options of a compiled function that creates no array: compiled without numba's
+# reference counting (its option ``_nrt``, which numba documents only for its own use).
+# With it, every call of a compiled function counts each array it is passed up on entry
+# and down on exit, atomically: across the robust search's many small calls, that counting
+# was the largest part of a fix that was not arithmetic (BENCHMARKS.md, "Positioning that
+# rejects echoes without reference counts"). Such a function neither creates an array nor
+# assigns a slice (:func:`put`, :func:`fill`); the arrays it is passed are its callers'.
+NO_REFCOUNT = {"cache": True, "_nrt": False}
+
+
+@numba.njit(cache=True, inline="always")
+def put(dst, src) -> None:  # pragma: no cover - compiled
+    """dst[:] = src (1-D), element by element: a function compiled with
+    :data:`NO_REFCOUNT` assigns no slice."""
+    for k in range(dst.shape[0]):
+        dst[k] = src[k]
+
+
+@numba.njit(cache=True, inline="always")
+def fill(dst, v) -> None:  # pragma: no cover - compiled
+    """dst[:] = v (1-D), element by element (:func:`put`)."""
+    for k in range(dst.shape[0]):
+        dst[k] = v
+
 
 @numba.njit(cache=True, inline="always")
 def residuals(x, a, rho, r, u):  # pragma: no cover - compiled
@@ -117,7 +141,7 @@ def lm_rows(
     x = np.empty(3)
     r, u, rn, un, xn, step, free = scratch(R.shape[1])
     for b in range(R.shape[0]):
-        x[:] = x0[b]
+        put(x, x0[b])
         cost, st, it = lm_solve_inline(a[owner[b]], R[b], x, lo[b], hi[b], bounded, poly,
                                        max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step,
                                        free)  # fmt: skip
@@ -133,7 +157,7 @@ def scratch(M):  # pragma: no cover - compiled
             np.empty(3), np.ones(3, dtype=np.bool_))  # fmt: skip
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def lm_solve(
     ab, rho, x, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, r, u, rn, un, xn, step, free
 ):  # pragma: no cover - compiled
@@ -152,7 +176,7 @@ def lm_solve_inline(
     dropping step (their loops then know the scratch arrays apart) and :func:`lm_solve`
     itself (one compiled solve for the other callers, which compile faster calling it than
     holding its loop)."""
-    free[:] = True
+    fill(free, True)
     if bounded and poly.shape[0] >= 3:
         into_floor_plan(x, poly)
     cost = residuals(x, ab, rho, r, u)
@@ -194,7 +218,7 @@ def lm_solve_inline(
         small_f = ok and actual <= ftol * cost and pred <= ftol * cost
         # accept / reject with Nielsen's damping update
         if ok:
-            x[:] = xn
+            put(x, xn)
             r, rn, u, un = rn, r, un, u  # the scratch arrays swap roles
             cost = cn
             moved = True
@@ -217,31 +241,30 @@ def lm_solve_inline(
     return cost, st, it
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def inside_floor_plan(x, y, poly) -> bool:  # pragma: no cover - compiled
     """Whether (x, y) lies inside the polygon ``poly`` (K, 2) (even-odd rule; a point on
     an edge counts as inside)."""
     K = poly.shape[0]
     inside = False
-    for i in range(K):
-        x0, y0 = poly[i, 0], poly[i, 1]
-        x1, y1 = poly[(i + 1) % K, 0], poly[(i + 1) % K, 1]
-        # on the edge: inside
-        dx, dy = x1 - x0, y1 - y0
-        cross = (x - x0) * dy - (y - y0) * dx
-        if (
-            abs(cross) <= 1e-12 * (abs(dx) + abs(dy))
-            and min(x0, x1) - 1e-12 <= x <= max(x0, x1) + 1e-12
-            and min(y0, y1) - 1e-12 <= y <= max(y0, y1) + 1e-12
-        ):
-            return True
-        if (y0 > y) != (y1 > y):
-            if x < x0 + (y - y0) * dx / dy:
+    x0, y0 = poly[K - 1, 0], poly[K - 1, 1]
+    for i in range(K):  # the edge from corner i − 1 to corner i
+        x1, y1 = poly[i, 0], poly[i, 1]
+        # an edge whose span of y misses y is neither under the point nor crossed
+        if min(y0, y1) - 1e-12 <= y <= max(y0, y1) + 1e-12:
+            dx, dy = x1 - x0, y1 - y0
+            cross = (x - x0) * dy - (y - y0) * dx
+            if abs(cross) <= 1e-12 * (abs(dx) + abs(dy)) and (
+                min(x0, x1) - 1e-12 <= x <= max(x0, x1) + 1e-12
+            ):
+                return True  # on the edge: inside
+            if (y0 > y) != (y1 > y) and x < x0 + (y - y0) * dx / dy:
                 inside = not inside
+        x0, y0 = x1, y1
     return inside
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
     """In place: a point p (3,) whose (x, y) lies outside the floor plan ``poly`` (K, 2)
     moves to the nearest point of its boundary (z unchanged)."""
@@ -250,7 +273,7 @@ def into_floor_plan(p, poly) -> None:  # pragma: no cover - compiled
     p[0], p[1] = nearest_on_boundary(p[0], p[1], poly)[1:]
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def nearest_on_boundary(x, y, poly):  # pragma: no cover - compiled
     """(squared distance, x, y) of the point of the boundary of the polygon ``poly``
     (K, 2) nearest to (x, y)."""
@@ -258,7 +281,8 @@ def nearest_on_boundary(x, y, poly):  # pragma: no cover - compiled
     best, bx, by = math.inf, x, y
     for i in range(K):
         x0, y0 = poly[i, 0], poly[i, 1]
-        dx, dy = poly[(i + 1) % K, 0] - x0, poly[(i + 1) % K, 1] - y0
+        k = i + 1 if i + 1 < K else 0
+        dx, dy = poly[k, 0] - x0, poly[k, 1] - y0
         L2 = dx * dx + dy * dy
         t = 0.0 if L2 == 0 else min(max(((x - x0) * dx + (y - y0) * dy) / L2, 0.0), 1.0)
         qx, qy = x0 + t * dx, y0 + t * dy
@@ -329,7 +353,7 @@ def _cofactor_solve(c, det, g, x) -> None:  # pragma: no cover - compiled
     x[0], x[1], x[2] = a0 / det, a1 / det, a2 / det
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
     """x (3,) the linear solution of the heard anchors' squared-range differences (the
     normal equations S x = g, solved by cofactors) for anchors ab (M, 3) and ranges rho
@@ -338,7 +362,7 @@ def linear_fix(ab, rho, x, coplanar) -> bool:  # pragma: no cover - compiled
     return flatness(normal_equations(ab, rho), x, coplanar) > coplanar
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def flatness(eq, x, coplanar) -> float:  # pragma: no cover - compiled
     """det S / (tr S)³ of the normal equations ``eq`` (:func:`normal_equations`; 0 for
     anchors in a plane, −1 with fewer than 4 heard), x (3,) their solution where it exceeds
@@ -354,7 +378,7 @@ def flatness(eq, x, coplanar) -> float:  # pragma: no cover - compiled
     return flat
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     """x (3,) and y (3,) the two positions that the ranges rho (M,) of coplanar anchors ab
     (M, 3) (NaN: not heard; at least 3 heard, not collinear) fix, mirror images of each
@@ -370,7 +394,7 @@ def mirror_fixes(ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     return mirrors(normal_equations(ab, rho), ab, rho, x, y, least)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def mirrors(eq, ab, rho, x, y, least) -> bool:  # pragma: no cover - compiled
     """:func:`mirror_fixes` from the normal equations ``eq`` of ab (M, 3) and rho (M,)
     (:func:`normal_equations`), which the caller may have built already."""

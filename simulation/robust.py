@@ -98,8 +98,10 @@ import numba
 import numpy as np
 
 from simulation.least_squares import (
+    NO_REFCOUNT,
     adjugate_times,
     cofactors,
+    fill,
     flatness,
     gram_gradient,
     into_floor_plan,
@@ -108,6 +110,7 @@ from simulation.least_squares import (
     mirrors,
     nearest_on_boundary,
     normal_equations,
+    put,
     residuals,
     scratch,
 )
@@ -273,10 +276,10 @@ def robust_rows(
             continue
         ab = a[owner[b]]
         gr = row_map(geo, front[owner[b]])
-        rho[:] = F[b]
+        put(rho, F[b])
         for j in range(M):
             used[b, j] = F[b, j] == F[b, j]
-        x[:] = xs[b]
+        put(x, xs[b])
         fst[0] = status[b]
         T, n, iters = _drop_failing(ab, rho, x, 2.0 * costs[b] / (sigma * sigma), nit[b],
                                     lo[b], hi[b], bounded, poly, drop_iter, xtol, ftol, gtol,
@@ -330,7 +333,7 @@ def proved_echoes(a, owner, R, sigma):  # pragma: no cover - compiled
     return F
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                   sigma, thr, used, work, score, trial, xt, xb, fst):  # fmt: skip
     # pragma: no cover - compiled
@@ -351,13 +354,13 @@ def _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, f
             break
         rho[best_j] = np.nan
         used[best_j] = False
-        x[:] = xb
+        put(x, xb)
         T, n = best_T, n - 1
         fst[0] = best_st
     return T, n, iters
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
                  gtol, sigma, thr, loose, short, used, work, geo, trial, xt, fst):  # fmt: skip
     # pragma: no cover - compiled
@@ -379,14 +382,14 @@ def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter,
                 trial[j] = np.nan
     if m < 6 or m == n:
         return False, T, n, iters
-    xt[:] = x
+    put(xt, x)
     c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                          *work)  # fmt: skip
     iters += it
     Tm = 2.0 * c / (sigma * sigma)
     if Tm > thr[m - 3] or _contradictions(ab, rho0, trial, xt, short, loose, geo, 0) > 0:
         return False, T, n, iters
-    x[:] = xt
+    put(x, xt)
     fst[0] = st
     for j in range(M):
         rho[j] = trial[j]
@@ -394,7 +397,7 @@ def _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi, bounded, poly, max_iter,
     return True, Tm, m, iters
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
           thr, loose, short, used, work, geo, trial, xt, seen,
           fst):  # fmt: skip  # pragma: no cover
@@ -420,7 +423,7 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
         seen[k] = 1.0
         for j in range(M):
             trial[j] = rho0[j] if used[j] or j == k else np.nan
-        xt[:] = x
+        put(xt, x)
         c, st, it = lm_solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                              *work)  # fmt: skip
         iters += it
@@ -428,7 +431,7 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
         if Tk <= thr[n - 2] and _contradictions(ab, rho0, trial, xt, short, loose, geo,
                                                 0) == 0:  # fmt: skip
             used[k] = True
-            x[:] = xt
+            put(x, xt)
             T, n = Tk, n + 1
             fst[0] = st
         else:
@@ -436,7 +439,7 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
     return T, n, iters
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
               sigma, passes, work):  # fmt: skip  # pragma: no cover - compiled
     """Step 3 of the module docstring once, from the fix x (3,) on the ranges rho (M,): the
@@ -452,15 +455,15 @@ def _drop_one(ab, rho, x, score, trial, xt, xb, lo, hi, bounded, poly, max_iter,
         if j < 0:
             break
         score[j] = -math.inf
-        trial[:] = rho
+        put(trial, rho)
         trial[j] = np.nan
-        xt[:] = x
+        put(xt, x)
         c, st, it = _solve(ab, trial, xt, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, work)
         iters += it
         Tj = 2.0 * c / (sigma * sigma)
         if Tj < best_T:
             best_T, best_j, best_st = Tj, j, st
-            xb[:] = xt
+            put(xb, xt)
         if best_T <= passes:  # the test passes without it: the next candidates are not tried
             break
     return best_T, best_j, best_st, iters
@@ -505,7 +508,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         if t >= HYPOTHESES and (best_short == 0 or (t >= FOUR_HYPOTHESES and four_short == 0
                                                     and four_T + four_ev <= thr[1])):  # fmt: skip
             break  # something uncontradicted: search no further
-        trial[:] = np.nan
+        fill(trial, np.nan)
         for i in range(4):
             trial[order[c[i]]] = rho0[order[c[i]]]
         iters += _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter,
@@ -531,7 +534,7 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         if not _next_colex(c, h):
             break
     if best_in >= 5 and best_short == 0:
-        x[:] = best_x
+        put(x, best_x)
         fst[0] = best_st
         return best_T, best_in, iters
     four_short, four_ev, four_T, iters, four_st = _settle(
@@ -551,7 +554,7 @@ def _clamp(x, lo, hi) -> None:  # pragma: no cover - compiled
         x[k] = min(max(x[k], lo[k]), hi[k])
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
                  loose, short, work) -> int:  # fmt: skip  # pragma: no cover - compiled
     """xt (3,) the fix of a minimal set (its ranges in trial (M,)) in the box [lo, hi]: the
@@ -570,14 +573,14 @@ def _minimal_fix(ab, rho0, trial, x, xt, xm, lo, hi, bounded, poly, max_iter, xt
             iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, POLISH_ITER),
                              xtol, ftol, gtol, *work)[2]  # fmt: skip
     elif not _mirror_fix(eq, ab, rho0, trial, xt, xm, lo, hi, poly, loose, short):
-        xt[:] = x  # collinear: from the fit so far
+        put(xt, x)  # collinear: from the fit so far
         iters = lm_solve(ab, trial, xt, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER), xtol,
                          ftol, gtol, *work)[2]  # fmt: skip
     _clamp(xt, lo, hi)
     return iters
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _mirror_fix(eq, ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool:
     # pragma: no cover - compiled
     """xt (3,) the fix of a minimal set of coplanar anchors (its ranges in trial (M,), its
@@ -595,11 +598,11 @@ def _mirror_fix(eq, ab, rho0, trial, xt, xm, lo, hi, poly, loose, short) -> bool
     in_m, short_m = _score(ab, rho0, xm, loose, max(loose, short))
     # an image moved into the room by more than ``loose`` no longer fits the set's ranges
     if (short_m, out_m > loose, -in_m, out_m) < (short_t, out_t > loose, -in_t, out_t):
-        xt[:] = xm
+        put(xt, xm)
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _outside(x, lo, hi, poly) -> float:  # pragma: no cover - compiled
     """In place: x (3,) moved into the box [lo, hi] and the floor plan ``poly`` (K, 2)
     (none with K = 0); returns how far it moved (m)."""
@@ -610,7 +613,7 @@ def _outside(x, lo, hi, poly) -> float:  # pragma: no cover - compiled
     return math.sqrt((x[0] - x0) ** 2 + (x[1] - x1) ** 2 + (x[2] - x2) ** 2)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st, four,
               four_x, four_short, four_ev, four_T, four_st, used, fst, trial, short, loose,
               geo, lo, hi, poly):  # fmt: skip  # pragma: no cover - compiled
@@ -623,7 +626,7 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
     the floor plan ``poly``; ``trial`` (M,): scratch). Returns (T, n, iterations)."""
     if best_in >= 5:
         now, T, n, ev = best_short, best_T, best_in, 0.0  # a set of 5 that something contradicts
-        x[:] = best_x
+        put(x, best_x)
         fst[0] = best_st
     else:
         for j in range(used.shape[0]):
@@ -631,7 +634,7 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
         now, ev = _ranked(ab, rho0, trial, x, short, loose, geo, INFINITE, lo, hi, poly)
     rests = four_short < now or (four_short == now == 0 and four_T + four_ev < T + ev)
     if four_T <= MINIMAL_T and rests:
-        x[:] = four_x  # no consistent set of 5: a consistent minimal set less contradicted
+        put(x, four_x)  # no consistent set of 5: a consistent minimal set less contradicted
         fst[0] = four_st
         for j in range(used.shape[0]):
             used[j] = four[j] == four[j]
@@ -659,7 +662,7 @@ def _order_key(ab, rho0, short):  # pragma: no cover - compiled
     return key
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _proved_echo(ab, rho, j, margin) -> bool:  # pragma: no cover - compiled
     """Whether the heard range rho[j] is proved an echo: an echo only lengthens a range, so
     r_j − r_k − |a_j − a_k| bounds its excess over the distance from below for every heard
@@ -682,7 +685,7 @@ def _put_off(pend, pend_x, pend_short, npend, order, c, xt, nshort) -> int:
     return npend + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _promising(ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, best_st, iters,
                lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, thr, loose, short,
                work, geo):  # fmt: skip  # pragma: no cover - compiled
@@ -699,13 +702,13 @@ def _promising(ab, rho0, xt, trial, best_x, used, best_short, best_in, best_T, b
     nshort = _contradictions(ab, rho0, trial, xt, short, loose, geo, bound)
     if not (m >= 5 and _better(nshort, m, best_short, best_in)):
         return best_short, best_in, best_T, best_st, iters, False
-    best_x[:] = xt
+    put(best_x, xt)
     for j in range(used.shape[0]):
         used[j] = trial[j] == trial[j]
     return nshort, m, Tk, st, iters, nshort == 0 and Tk <= thr[m - 3]
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four_x, four_short,
             four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
             sigma, short, loose, work, geo):  # fmt: skip  # pragma: no cover - compiled
@@ -718,10 +721,10 @@ def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four
     for p in range(npend):
         if pend_short[p] > four_short:
             continue
-        trial[:] = np.nan
+        fill(trial, np.nan)
         for i in range(4):
             trial[pend[p, i]] = rho0[pend[p, i]]
-        xt[:] = pend_x[p]
+        put(xt, pend_x[p])
         four_short, four_ev, four_T, iters, four_st = _minimal(
             ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters, lo,
             hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work, geo,
@@ -729,7 +732,7 @@ def _settle(ab, rho0, pend, pend_x, pend_short, npend, xt, xm, trial, four, four
     return four_short, four_ev, four_T, iters, four_st
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T, four_st, iters,
              lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma, short, loose, work,
              geo):  # fmt: skip  # pragma: no cover
@@ -738,7 +741,7 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T,
     fewer contradictions than the best minimal set so far, or as few and a smaller T plus
     penalty (:func:`_ranked`); returns the best's (contradictions, penalty, T, iterations,
     the status of its solve)."""
-    xm[:] = xt
+    put(xm, xt)
     c, st, it = lm_solve(ab, trial, xm, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
                          xtol, ftol, gtol, *work)  # fmt: skip
     Tm = 2.0 * c / (sigma * sigma)
@@ -748,13 +751,13 @@ def _minimal(ab, rho0, xt, xm, trial, four, four_x, four_short, four_ev, four_T,
         return four_short, four_ev, four_T, iters + it, four_st
     nshort, ev = _ranked(ab, rho0, trial, xm, short, loose, geo, four_short, lo, hi, poly)
     if (nshort, Tm + ev) < (four_short, four_T + four_ev):
-        four[:] = trial
-        four_x[:] = xm
+        put(four, trial)
+        put(four_x, xm)
         return nshort, ev, Tm, iters + it, st
     return four_short, four_ev, four_T, iters + it, four_st
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _ranked(ab, rho0, kept, x, short, long, geo, bound, lo, hi, poly):  # pragma: no cover
     """(contradictions, penalty) of the fix x (3,) on the ranges kept (M,)
     (:func:`_contradictions`, counting stopped above ``bound``): as contradicted fixes rank
@@ -766,7 +769,7 @@ def _ranked(ab, rho0, kept, x, short, long, geo, bound, lo, hi, poly):  # pragma
     return n + max(miss - MISSES, 0), penalty
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _held(x, lo, hi, poly) -> int:  # pragma: no cover - compiled
     """1 when x (3,) lies on the boundary of the box [lo, hi] or of the floor plan ``poly``
     (K, 2) (within :data:`HELD`), else 0."""
@@ -796,7 +799,7 @@ def _better(nshort, inl, best_short, best_in) -> bool:  # pragma: no cover - com
     return nshort < best_short or (nshort == best_short and inl > best_in)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _refine(ab, rho0, x, trial, loose, tight, lo, hi, bounded, poly, max_iter, xtol, ftol,
             gtol, sigma, work):  # fmt: skip  # pragma: no cover - compiled
     """In place on x (3,): the least-squares fix on the anchors whose range is within
@@ -815,7 +818,7 @@ def _refine(ab, rho0, x, trial, loose, tight, lo, hi, bounded, poly, max_iter, x
     return T, m, iters, st
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _score(ab, rho0, x, tol, short) -> tuple[int, int]:  # pragma: no cover - compiled
     """(inliers, contradictions) of the position x (3,): the heard anchors whose range is
     within ``tol`` m of their distance, and those whose range is shorter than their
@@ -829,7 +832,7 @@ def _score(ab, rho0, x, tol, short) -> tuple[int, int]:  # pragma: no cover - co
     return inl, nshort
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragma: no cover
     """How much contradicts the fix x (3,) that rests on the ranges kept (M,) (NaN: not
     kept; module docstring): each range of rho0 (M,) shorter than its distance by more
@@ -842,7 +845,7 @@ def _contradictions(ab, rho0, kept, x, short, long, geo, bound) -> int:  # pragm
     return n + max(miss - MISSES, 0)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _map_evidence(ab, rho0, kept, x, short, long, geo, bound):  # pragma: no cover - compiled
     """(contradictions before the misses, misses) of the fix x (3,) on the ranges kept
     (M,): the first counts the short ranges (M + 1 each) and the kept anchors that do not
@@ -885,7 +888,7 @@ def _sees(geo, x, ab, j, every) -> bool:  # pragma: no cover - compiled
     return sees_near(geo, x, ab[j], geo[4][j], GRAZE, every)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _inliers(ab, rho0, x, tol, trial) -> int:  # pragma: no cover - compiled
     """trial (M,): the ranges of rho0 (M,) within ``tol`` m of their anchor's distance from
     x (3,), NaN elsewhere; returns how many."""
@@ -903,7 +906,7 @@ def _distance(x, a) -> float:  # pragma: no cover - compiled
     return math.sqrt((x[0] - a[0]) ** 2 + (x[1] - a[1]) ** 2 + (x[2] - a[2]) ** 2)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
     """In place: the next k-subset c (k,) (increasing indices into 0..h−1) in colexicographic
     order, the subsets of the first indices before any that needs a later one; False after
@@ -919,7 +922,7 @@ def _next_colex(c, h) -> bool:  # pragma: no cover - compiled
     return False
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pragma: no cover
     """:data:`VERIFIED` when the n anchors ``used`` (M,) pass the test (T ≤ thr[n − 3],
     n ≥ 5), fix x (3,) (position dilution of precision ≤ :data:`DOP_MAX`) and keep the echo
@@ -939,7 +942,7 @@ def _quality(ab, rho0, used, x, T, n, thr, bias, alert, rho, work) -> int:  # pr
     return VERIFIED if bias * _largest_slope(rho, u, c, det) <= alert else UNVERIFIED
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _largest_slope(rho, u, c, det) -> float:  # pragma: no cover - compiled
     """max_j ‖k_j‖ / √(1 − h_jj) over the anchors whose range in rho (M,) is not NaN: the
     move of the fix per unit of test statistic √ΔT·σ that a bias on range j causes
@@ -961,7 +964,7 @@ def _largest_slope(rho, u, c, det) -> float:  # pragma: no cover - compiled
     return worst
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
     """score (M,): r_j² / (1 − h_jj) of every heard anchor at x (−inf for the others), h_jj
     the leverage u_jᵀ (UᵀU)⁻¹ u_j of the unit vectors u_j from the anchors to x."""
@@ -979,7 +982,7 @@ def _deleted_residuals(x, ab, rho, score, r, u):  # pragma: no cover - compiled
         score[j] = r[j] * r[j] / max(1.0 - h, 1e-9)
 
 
-@numba.njit(cache=True)
+@numba.njit(**NO_REFCOUNT)
 def _argmax_finite(v) -> int:  # pragma: no cover - compiled
     """The index of the largest finite entry of v, −1 when there is none."""
     best, k = -math.inf, -1

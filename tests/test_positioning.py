@@ -215,3 +215,38 @@ def test_missing_ranges_with_collinear_heard_anchors_give_no_fix():
     assert fix.status[0] == -2 and np.isnan(fix.x).all()
     r[0, 4] = np.linalg.norm(p[0] - a[4])
     assert locate(a, r, full_output=True).status[0] > 0
+
+
+@pytest.mark.parametrize(
+    "corners",
+    [
+        [[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]],  # the L-shaped lab
+        [[0, 0], [6, 1], [8, 5], [4, 3.5], [1, 6]],  # slanted edges, one reflex corner
+    ],
+)
+def test_floor_plan_tests_agree_with_shapely(corners):
+    """The compiled floor-plan helpers that keep positions in the room agree with shapely:
+    a point inside or on the boundary is in the floor plan (corners and edges included),
+    one outside is not; the nearest boundary point is at shapely's distance."""
+    import shapely
+
+    from simulation.least_squares import inside_floor_plan, into_floor_plan, nearest_on_boundary
+
+    poly = np.array(corners, dtype=float)
+    shape = shapely.Polygon(poly)
+    rng = np.random.default_rng(7)
+    pts = rng.uniform(-1, 9, size=(4000, 2))
+    edges = np.roll(poly, -1, axis=0) - poly
+    on = poly[rng.integers(len(poly), size=200)]
+    t = rng.uniform(0, 1, size=(200, 1))
+    on_edges = on + t * edges[[np.flatnonzero((poly == c).all(1))[0] for c in on]]
+    inside = np.array([inside_floor_plan(x, y, poly) for x, y in pts])
+    assert np.array_equal(inside, shapely.covers(shape, shapely.points(pts)))
+    assert all(inside_floor_plan(x, y, poly) for x, y in np.vstack([poly, on_edges]))
+    for x, y in pts[:300]:
+        d2, bx, by = nearest_on_boundary(x, y, poly)
+        assert np.sqrt(d2) == pytest.approx(shape.exterior.distance(shapely.Point(x, y)), abs=1e-12)
+        p = np.array([x, y, 1.5])
+        into_floor_plan(p, poly)
+        assert p[2] == 1.5 and inside_floor_plan(p[0], p[1], poly)
+        assert (p[0], p[1]) == ((x, y) if inside_floor_plan(x, y, poly) else (bx, by))
