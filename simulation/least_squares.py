@@ -27,14 +27,29 @@ import math
 import numba
 import numpy as np
 
-# The options of a compiled function that creates no array: compiled without numba's
-# reference counting (its option ``_nrt``, which numba documents only for its own use).
-# With it, every call of a compiled function counts each array it is passed up on entry
-# and down on exit, atomically: across the robust search's many small calls, that counting
-# was the largest part of a fix that was not arithmetic (BENCHMARKS.md, "Positioning that
-# rejects echoes without reference counts"). Such a function neither creates an array nor
-# assigns a slice (:func:`put`, :func:`fill`); the arrays it is passed are its callers'.
-NO_REFCOUNT = {"cache": True, "_nrt": False}
+
+def _without_refcounts() -> dict:
+    """numba's options of a compiled function that creates no array: compiled without
+    numba's reference counting (its option ``_nrt``, which numba documents only for its own
+    use), where this numba knows that option; else with it (the same results, slower).
+
+    With reference counts, every call of a compiled function counts each array it is passed
+    up on entry and down on exit, atomically: across the robust search's many small calls,
+    that counting was the largest part of a fix that was not arithmetic (BENCHMARKS.md,
+    "Positioning that rejects echoes without reference counts"). Such a function neither
+    creates an array nor assigns a slice (:func:`put`, :func:`fill`); the arrays it is
+    passed are its callers'."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:  # numba moved its options: keep the reference counts
+        return {"cache": True}
+    if not hasattr(CPUTargetOptions, "_nrt"):
+        return {"cache": True}
+    return {"cache": True, "_nrt": False}
+
+
+#: the options of :func:`_without_refcounts`
+NO_REFCOUNT = _without_refcounts()
 
 
 @numba.njit(cache=True, inline="always")

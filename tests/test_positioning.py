@@ -250,3 +250,25 @@ def test_floor_plan_tests_agree_with_shapely(corners):
         into_floor_plan(p, poly)
         assert p[2] == 1.5 and inside_floor_plan(p[0], p[1], poly)
         assert (p[0], p[1]) == ((x, y) if inside_floor_plan(x, y, poly) else (bx, by))
+
+
+def test_without_reference_counts_where_numba_knows_the_option(monkeypatch):
+    """The compiled helpers that create no array drop numba's reference counts where this
+    numba knows the option, and keep them (the same results, slower) where it does not."""
+    import numba.core.cpu
+
+    from simulation import least_squares
+
+    assert least_squares.NO_REFCOUNT == {"cache": True, "_nrt": False}
+
+    class Options:  # a numba without the option
+        pass
+
+    monkeypatch.setattr(numba.core.cpu, "CPUTargetOptions", Options)
+    assert least_squares._without_refcounts() == {"cache": True}
+    counted = numba.njit(least_squares.inside_floor_plan.py_func)
+    poly = np.array([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], dtype=float)
+    pts = np.random.default_rng(5).uniform(-1, 8, size=(500, 2))
+    assert [counted(x, y, poly) for x, y in pts] == [
+        least_squares.inside_floor_plan(x, y, poly) for x, y in pts
+    ]
