@@ -42,10 +42,8 @@ def _without_refcounts() -> dict:
     try:
         from numba.core.cpu import CPUTargetOptions
     except ImportError:  # numba moved its options: keep the reference counts
-        return {"cache": True}
-    if not hasattr(CPUTargetOptions, "_nrt"):
-        return {"cache": True}
-    return {"cache": True, "_nrt": False}
+        CPUTargetOptions = None
+    return {"cache": True, "_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {"cache": True}
 
 
 #: the options of :func:`_without_refcounts`
