@@ -259,7 +259,18 @@ def test_without_reference_counts_where_numba_knows_the_option(monkeypatch):
 
     from simulation import least_squares
 
-    assert least_squares.NO_REFCOUNT == {"cache": True, "_nrt": False}
+    poly = np.array([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], dtype=float)
+    knows = hasattr(numba.core.cpu.CPUTargetOptions, "_nrt")
+    assert least_squares.NO_REFCOUNT == (
+        {"cache": True, "_nrt": False} if knows else {"cache": True}
+    )
+    # where the option is honoured, the compiled code has no reference counting left
+    # (compiled here without numba's cache: a test writes nothing beside the module)
+    options = {k: v for k, v in least_squares.NO_REFCOUNT.items() if k != "cache"}
+    helper = numba.njit(**options)(least_squares.inside_floor_plan.py_func)
+    helper(1.0, 1.0, poly)
+    code = "".join(helper.inspect_llvm().values())
+    assert ("NRT_incref" in code) is not knows
 
     class Options:  # a numba without the option
         pass
@@ -267,7 +278,8 @@ def test_without_reference_counts_where_numba_knows_the_option(monkeypatch):
     monkeypatch.setattr(numba.core.cpu, "CPUTargetOptions", Options)
     assert least_squares._without_refcounts() == {"cache": True}
     counted = numba.njit(least_squares.inside_floor_plan.py_func)
-    poly = np.array([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], dtype=float)
+    counted(1.0, 1.0, poly)
+    assert "NRT_incref" in "".join(counted.inspect_llvm().values())
     pts = np.random.default_rng(5).uniform(-1, 8, size=(500, 2))
     assert [counted(x, y, poly) for x, y in pts] == [
         least_squares.inside_floor_plan(x, y, poly) for x, y in pts
