@@ -75,6 +75,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import threading
 from dataclasses import dataclass
 
 import numba
@@ -356,6 +357,27 @@ NEAR_TOP = 64
 #: product (see Dsp.indices)
 PART_BYTES = 128 * 2**20
 
+#: each thread's correlation buffers (:func:`_part_buffer`)
+_BUFFERS = threading.local()
+
+
+def _part_buffer(rows: int, nfft: int, dtype) -> np.ndarray:
+    """(rows, nfft) zeros of ``dtype``: this thread's correlation buffer of that precision,
+    kept from call to call of :meth:`Dsp.picks` (made again for another width or more
+    rows). A part's rows hold its correlation at lags 0 … Nc − 1 and zeros after, which no
+    step writes, so a kept buffer keeps them. Memory fresh from the system costs a page
+    fault and the kernel's zeroing on its first write, every call again for a buffer made
+    per call: one buffer per thread and precision (at most :data:`PART_BYTES`) stays held
+    instead."""
+    kept = getattr(_BUFFERS, "parts", None)
+    if kept is None:
+        kept = _BUFFERS.parts = {}
+    key = np.dtype(dtype).str
+    buf = kept.get(key)
+    if buf is None or buf.shape[1] != nfft or buf.shape[0] < rows:
+        buf = kept[key] = np.zeros((rows, nfft), dtype=dtype)
+    return buf[:rows]
+
 
 class Dsp:
     """Batched, fast form of the receiver chain for one chirp and receiver.
@@ -629,7 +651,7 @@ class Dsp:
         out = np.empty(n, dtype=np.int64)
         peak = np.empty(n)
         unsure = np.zeros(n, dtype=bool)
-        buf = np.zeros((min(step, n), self.nfft), dtype=self.dtype)
+        buf = _part_buffer(min(step, n), self.nfft, self.dtype)
         threads = min(scipy.fft.get_workers(), -(-min(step, n) // block))
         pool = None
         if threads > 1:

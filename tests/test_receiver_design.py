@@ -60,6 +60,41 @@ def test_fft_form_gives_the_matrix_form_and_the_reference_index(window):
     assert np.array_equal(Dsp(CH, rx, "float32").indices(w), k)
 
 
+@pytest.mark.parametrize("rx", [Receiver(), Receiver(window=1920, t_wake=0.005)])
+def test_picks_the_same_with_the_kept_buffer(rx, monkeypatch):
+    """Each thread keeps its correlation buffer from call to call (both forms): the picks
+    are those of a fresh buffer whatever earlier calls left in it, its columns past the
+    correlation stay zero, and another thread has its own."""
+    import threading
+
+    from simulation import receiver
+
+    dsp = Dsp(CH, rx, "float32")
+    w = _random_windows(rx, np.random.default_rng(11), n=40)
+    other = _random_windows(rx, np.random.default_rng(12), n=60) * 3.0
+    monkeypatch.setattr(receiver, "_BUFFERS", threading.local())
+    fresh = dsp.picks(w[:25], sigma=0.01)
+    dsp.picks(other, sigma=0.01)  # a longer part: the buffer grows and holds other rows
+    kept = dsp.picks(w[:25], sigma=0.01)
+    assert np.array_equal(kept[0], fresh[0]) and np.array_equal(kept[1], fresh[1])
+    # a part of other rows: the same indices; the peaks to single precision's rounding (the
+    # BLAS blocks a product by its rows)
+    kept = dsp.picks(w, sigma=0.01)
+    assert np.array_equal(kept[0][:25], fresh[0])
+    np.testing.assert_allclose(kept[1][:25], fresh[1], rtol=1e-6)
+    buf = receiver._BUFFERS.parts[np.dtype(np.float32).str]
+    assert buf.shape[0] == 60 and not buf[:, dsp.n_corr :].any()
+    assert buf[:, : dsp.n_corr].any()  # it holds the last part's correlation
+    theirs = []
+    t = threading.Thread(target=lambda: theirs.append(receiver._part_buffer(5, dsp.nfft, "<f4")))
+    t.start()
+    t.join()
+    assert not np.shares_memory(theirs[0], buf)
+    # another width replaces the kept buffer (one per thread and precision)
+    assert receiver._part_buffer(5, dsp.nfft + 2, "<f4").shape == (5, dsp.nfft + 2)
+    assert not np.shares_memory(receiver._BUFFERS.parts["<f4"], buf)
+
+
 def test_the_papers_receiver_keeps_its_chain():
     """The default receiver runs the one-matrix DSP and the short-window synthesis: the
     paper's results do not move."""
