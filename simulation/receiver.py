@@ -364,8 +364,8 @@ _BUFFERS = threading.local()
 def _part_buffer(rows: int, nfft: int, dtype) -> np.ndarray:
     """(rows, nfft) zeros of ``dtype``: this thread's correlation buffer of that precision,
     kept from call to call of :meth:`Dsp.picks` (made again for another width or more
-    rows). A part's rows hold its correlation at lags 0 … Nc − 1 and zeros after, which no
-    step writes, so a kept buffer keeps them. Memory fresh from the system costs a page
+    rows). A part's rows hold its correlation at lags 0 … Nc − 1 and zeros after, which
+    every step leaves zero, so a kept buffer keeps them. Memory fresh from the system costs a page
     fault and the kernel's zeroing on its first write, every call again for a buffer made
     per call: one buffer per thread and precision (at most :data:`PART_BYTES`) stays held
     instead."""
@@ -626,7 +626,8 @@ class Dsp:
 
         Windows go through in parts of up to :data:`PART_BYTES` of correlation: a part's
         correlation is one matrix product (or its FFT form) into a zero-padded buffer
-        reused from part to part (few large products: each wakes the BLAS threads), its
+        reused from part to part and from call to call (:func:`_part_buffer`; few large
+        products: each wakes the BLAS threads), its
         FFTs run in blocks of ``block`` rows on ``scipy.fft``'s worker count of threads
         (``with scipy.fft.set_workers(n): ...``; numpy and scipy.fft release the GIL).
         Results depend neither on ``block`` nor on the threads. In single precision, the
