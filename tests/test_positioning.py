@@ -217,10 +217,14 @@ def test_missing_ranges_with_collinear_heard_anchors_give_no_fix():
     assert locate(a, r, full_output=True).status[0] > 0
 
 
+#: the L-shaped lab's floor plan (examples/l-shaped-lab.toml), as test_polygon_rooms has it
+L_CORNERS = [[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]]
+
+
 @pytest.mark.parametrize(
     "corners",
     [
-        [[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]],  # the L-shaped lab
+        L_CORNERS,  # the L-shaped lab
         [[0, 0], [6, 1], [8, 5], [4, 3.5], [1, 6]],  # slanted edges, one reflex corner
     ],
 )
@@ -259,7 +263,7 @@ def test_without_reference_counts_where_numba_knows_the_option(monkeypatch):
 
     from simulation import least_squares
 
-    poly = np.array([[0, 0], [7, 0], [7, 3], [3, 3], [3, 6], [0, 6]], dtype=float)
+    poly = np.array(L_CORNERS, dtype=float)
     knows = hasattr(numba.core.cpu.CPUTargetOptions, "_nrt")
     assert least_squares.NO_REFCOUNT == (
         {"cache": True, "_nrt": False} if knows else {"cache": True}
