@@ -10,7 +10,8 @@ its phase, whole. To change one value of a preset, start from its object::
 The command line's flags change single values of the preset's objects (``--effort``).
 
 - **quick**: one table draw (the exact nodes), four short search chains (1000 layouts),
-  one lattice at half the candidate spacing for the refinement (0.2 m in techtile), three
+  three starting layouts, the swarm's best refined (at every M) on one lattice at half the
+  candidate spacing (0.2 m in techtile), three
   fresh draws for the finalists and a light validation (8 realizations at the evaluation
   nodes, no held-out nodes, 2 mounting and 3 field draws): a first answer.
 - **default**: the planner's defaults (the options classes' own).
@@ -51,7 +52,7 @@ EFFORTS = {
     "quick": Effort(
         "quick",
         SearchOptions(draws=1, exact_draws=1, chains=4, evaluations=1000, random_starts=20,
-                      fine_halvings=1, keep=3),
+                      fine_halvings=1, keep=3, fine_optima=1),
         FinalistOptions(draws=3),
         ValidationOptions(realizations=8, held_out_realizations=0, mount_draws=2,
                           field_draws=3),

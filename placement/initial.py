@@ -147,7 +147,7 @@ def search_initial(
     system=None,
 ) -> tuple[list[InitialLayout], dict[str, Any]]:
     """The starting layouts of a simulated cost (the ``system`` simulated, default the
-    paper's): the ``options.keep`` best distinct optima of
+    paper's): the ``options.keep_for(M)`` best distinct optima of
     :func:`placement.simselect.simulated_select` on the range table (``table``: a
     :class:`~placement.rangetable.RangeTable`, or a callable that builds it), and the
     search's summary. With a ``checkpoint``, a finished search is saved beside it
@@ -185,9 +185,10 @@ def search_initial(
     )
     bar.close()
     grid = room.grid() if nodes is None else nodes
+    kept = sel.layouts(options.keep_for(M))
     layouts = [
         InitialLayout(f"search-{k + 1}", a, float(np.mean(peb(a, grid, sigma))), table_cost=c)
-        for k, (a, (_, c)) in enumerate(zip(sel.layouts(options.keep), sel.optima, strict=False))
+        for k, (a, (_, c)) in enumerate(zip(kept, sel.optima, strict=False))
     ]
     summary = sel.to_dict()
     del summary["anchors"], summary["optima"]

@@ -296,7 +296,7 @@ class Planner:
         self._lap("pso", res.nfev)
 
     def refine(self) -> None:
-        """The swarm's best ``search.fine_optima`` distinct layouts, each refined on finer
+        """The swarm's best ``search.fine_optima_for(M)`` distinct layouts, each refined on finer
         lattices of the range table (:func:`placement.simselect.refine_on_table`). Simulated
         costs whose starting layouts came from the search only."""
         from placement.simselect import refine_on_table
@@ -310,7 +310,7 @@ class Planner:
             self.refined = resume.refined_from_json(saved["refined"])
             self._lap("refinement", saved["nfev"])
             return
-        starts = [res.pbest[i] for i in best_distinct(res, opt.fine_optima)]
+        starts = [res.pbest[i] for i in best_distinct(res, opt.fine_optima_for(self.M))]
         bar = ProgressBar(self.progress, "refinement")
         bar.update(0, len(starts))
         nfev = 0

@@ -226,6 +226,15 @@ AUTO_CANDIDATES = 1000
 #: the finest lattice of the default refinement (m)
 FINEST_SPACING = 0.1
 
+#: the layouts' size up to which a plan starts from more search optima and refines them
+#: all: four anchors leave a fix no redundant range, so each anchor shapes the whole field
+#: and a layout's refined form can rank far from its form on the coarse candidate grid
+#: (docs/model.md, "Refinement after the swarm")
+SMALL_M = 4
+#: distinct search optima a plan of at most :data:`SMALL_M` anchors starts from: as many as
+#: the swarm of ``seed_then_pso`` has particles (:data:`placement.plan.LOCAL_SWARM`)
+SMALL_M_KEEP = 5
+
 
 @dataclass(frozen=True)
 class SearchOptions:
@@ -257,8 +266,10 @@ class SearchOptions:
     fine_steps : lattice steps on each side of an anchor along each in-plane axis.
     fine_neighbours : the swap neighbourhood of the descents on a grown table.
     fine_optima : the swarm's best distinct layouts that a plan refines on the fine lattices,
-        each on the table grown by its own columns.
-    keep : distinct optima returned as seeds.
+        each on the table grown by its own columns; None (the default): one, or at M = 4
+        every distinct layout of the swarm (:meth:`fine_optima_for`).
+    keep : distinct optima returned as seeds; None (the default): 4, or at M = 4
+        :data:`SMALL_M_KEEP` (:meth:`keep_for`).
     precision : the receiver DSP's precision for the table.
     coverage_k : in a room where walls, obstacles or the signal's reach hide candidates
         from some nodes, the first chain starts from the coverage selection that makes
@@ -287,8 +298,8 @@ class SearchOptions:
     fine_halvings: int | None = None
     fine_steps: int = 1
     fine_neighbours: int = 8
-    fine_optima: int = 1
-    keep: int = 4
+    fine_optima: int | None = None
+    keep: int | None = None
     precision: str = "float32"
     coverage_k: int = 5
     min_coverage: float | None = None
@@ -321,8 +332,10 @@ class SearchOptions:
             checks.count("fine_halvings", self.fine_halvings, low=0, high=10)
         checks.count("fine_steps", self.fine_steps, low=1, high=10)
         checks.count("fine_neighbours", self.fine_neighbours, low=1, high=10_000)
-        checks.count("fine_optima", self.fine_optima, low=1, high=1000)
-        checks.count("keep", self.keep, low=1, high=1000)
+        if self.fine_optima is not None:
+            checks.count("fine_optima", self.fine_optima, low=1, high=1000)
+        if self.keep is not None:
+            checks.count("keep", self.keep, low=1, high=1000)
         checks.choice("precision", self.precision, ("float64", "float32"))
         checks.count("coverage_k", self.coverage_k, low=0, high=MAX_ANCHORS)
         if self.min_coverage is not None:
@@ -338,6 +351,21 @@ class SearchOptions:
         area = float(np.sum(allowed_area(room)))
         auto = math.ceil(10 * math.sqrt(area / AUTO_CANDIDATES)) / 10
         return max(DEFAULT_SPACING, auto)
+
+    def keep_for(self, M: int) -> int:
+        """The distinct optima a plan of M anchors starts from: ``keep`` when given, else
+        4, or :data:`SMALL_M_KEEP` at M = 4 (:data:`SMALL_M`)."""
+        if self.keep is not None:
+            return self.keep
+        return SMALL_M_KEEP if M <= SMALL_M else 4
+
+    def fine_optima_for(self, M: int) -> int:
+        """The swarm's distinct layouts a plan of M anchors refines: ``fine_optima`` when
+        given, else one, or at M = 4 (:data:`SMALL_M`) every one (the starting layouts and
+        the swarm's own)."""
+        if self.fine_optima is not None:
+            return self.fine_optima
+        return self.keep_for(M) + 1 if M <= SMALL_M else 1
 
     def fine_spacings_for(self, room: Room) -> tuple[float, ...]:
         """The refinement's lattices (m) in ``room``: ``fine_spacings`` when given, else

@@ -9,7 +9,7 @@ E=docs/examples
 
 # the small example the tests re-plan (a coarse search; half a minute)
 $AP plan --anchors 4 --search-spacing 1.0 --search-chains 2 --search-evaluations 300 \
-    --validate-realizations 5 --no-progress --out $E/quick
+    --refine-layouts 1 --validate-realizations 5 --no-progress --out $E/quick
 
 # the README command's plan (the paper's experiment: the paper's system), with its report,
 # DXF, what-if tables and mounting sheet

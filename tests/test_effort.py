@@ -70,6 +70,10 @@ def test_the_command_line_changes_single_values_of_the_preset():
     plain = plan_options(build_parser().parse_args(["plan"]))
     assert plain["validation"] == ValidationOptions() and plain["search"] == SearchOptions()
     assert plain["finalists"] == FinalistOptions()
+    refine = plan_options(build_parser().parse_args(["plan", "--refine-layouts", "2"]))
+    assert refine["search"] == SearchOptions(fine_optima=2)
+    with pytest.raises(ValueError, match=r"^--refine-layouts: .*\[1, 1000\].*got 0"):
+        plan_options(build_parser().parse_args(["plan", "--refine-layouts", "0"]))
 
 
 def test_the_command_line_prints_the_field_figure_first(capsys):

@@ -11,7 +11,7 @@ from placement.finalists import FinalistOptions, score_finalists
 from placement.plan import LOCAL_SWARM, seed_then_pso
 from placement.pso import PSOOptions
 from placement.rangetable import node_draws, range_table, table_errors
-from placement.simselect import SearchOptions
+from placement.simselect import SMALL_M_KEEP, SearchOptions
 from placement.validation import Validation, ValidationOptions, validate_layout
 from simulation import Room
 
@@ -154,11 +154,24 @@ def test_each_refined_layout_is_refined_on_its_own_columns():
     def refined(res):
         return {f["source"]: f["anchors"] for f in res.finalists if f["source"].startswith("ref")}
 
-    one = refined(_plan(swarm=_swarm(iterations=1)))
+    one = refined(_plan(search=dataclasses.replace(SMALL, fine_optima=1), swarm=_swarm(4, 1)))
     two = refined(_plan(search=dataclasses.replace(SMALL, fine_optima=2), swarm=_swarm(4, 1)))
     assert sorted(one) == ["refined-1"] and sorted(two) == ["refined-1", "refined-2"]
     np.testing.assert_array_equal(one["refined-1"], two["refined-1"])
     assert not np.array_equal(two["refined-1"], two["refined-2"])
+
+
+def test_four_anchors_start_from_more_optima_and_refine_every_layout():
+    """At M = 4 the defaults start the swarm from SMALL_M_KEEP search optima and refine
+    every distinct swarm layout; at M = 5 from 4 and one refined; given values win."""
+    assert (SMALL.keep_for(4), SMALL.fine_optima_for(4)) == (SMALL_M_KEEP, SMALL_M_KEEP + 1)
+    assert (SMALL.keep_for(5), SMALL.fine_optima_for(5)) == (4, 1)
+    given = dataclasses.replace(SMALL, keep=2, fine_optima=3)
+    assert (given.keep_for(4), given.fine_optima_for(4)) == (2, 3)
+    res = _plan(search=dataclasses.replace(SMALL, chains=6), swarm=_swarm(SMALL_M_KEEP, 1))
+    refined = [f["source"] for f in res.finalists if f["source"].startswith("refined")]
+    assert 1 < len(res.initial) <= SMALL_M_KEEP  # every particle a search optimum
+    assert len(refined) == len(res.initial)
 
 
 def test_the_mounting_tolerance_is_set_once_and_reaches_every_stage():

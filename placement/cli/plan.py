@@ -101,6 +101,9 @@ def _add_search_arguments(p) -> None:
     p.add_argument("--search-chains", type=int, help="independent search chains")
     p.add_argument("--search-evaluations", type=int, help="table layouts scored per chain")
     p.add_argument("--search-draws", type=int, help="scene draws of the range table")
+    p.add_argument("--refine-layouts", type=int, metavar="N",
+                   help="the swarm's distinct layouts refined on the fine lattices "
+                   "(default: 1, every one with 4 anchors)")  # fmt: skip
     p.add_argument(
         "--min-coverage",
         type=float,
@@ -160,7 +163,7 @@ FLAGS = {
     "search": {"spacing": "--search-spacing", "chains": "--search-chains",
                "evaluations": "--search-evaluations", "draws": "--search-draws",
                "exact_draws": "--search-draws", "mount_tolerance": "--mount-tolerance",
-               "min_coverage": "--min-coverage"},
+               "min_coverage": "--min-coverage", "fine_optima": "--refine-layouts"},
     "swarm": {"particles": "--particles", "iterations": "--iterations",
               "eval_timeout": "--eval-timeout"},
     "finalists": {"count": "--finalists", "draws": "--finalist-draws",
@@ -187,7 +190,8 @@ def plan_options(args) -> dict:
     given = {
         "search": {"spacing": args.search_spacing, "chains": args.search_chains,
                    "evaluations": args.search_evaluations, "draws": args.search_draws,
-                   "mount_tolerance": args.mount_tolerance, "min_coverage": args.min_coverage},
+                   "mount_tolerance": args.mount_tolerance, "min_coverage": args.min_coverage,
+                   "fine_optima": args.refine_layouts},
         "swarm": {"particles": args.particles, "iterations": args.iterations,
                   "eval_timeout": args.eval_timeout},
         "finalists": {"count": args.finalists, "draws": args.finalist_draws,
