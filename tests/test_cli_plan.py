@@ -14,7 +14,8 @@ def test_plan_end_to_end_with_search_and_simulated_cost(tmp_path, capsys):
     argv = ["plan", "--anchors", "4", "--particles", "4", "--iterations", "2"]
     argv += ["--validate-realizations", "2", "--no-progress", "--seed", "3"]
     argv += ["--search-spacing", "2.0", "--search-chains", "2", "--search-evaluations", "30"]
-    argv += ["--finalists", "3", "--finalist-draws", "1", "--workers", "1", "--out", str(out)]
+    argv += ["--refine-layouts", "1", "--finalists", "3", "--finalist-draws", "1"]
+    argv += ["--workers", "1", "--out", str(out)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "validation, 2 realizations at the 270 nodes" in text

@@ -10,8 +10,8 @@ from killing import run, run_and_kill
 #: a small plan with a swarm of three iterations, so that every phase takes a moment (the
 #: validation too: a kill 0.3 s after its bar must find it running)
 ARGS = ["plan", "--anchors", "4", "--search-spacing", "1.0", "--search-chains", "2",
-        "--search-evaluations", "300", "--iterations", "3", "--validate-realizations", "30",
-        "--workers", "2"]  # fmt: skip
+        "--search-evaluations", "300", "--refine-layouts", "1", "--iterations", "3",
+        "--validate-realizations", "30", "--workers", "2"]  # fmt: skip
 
 
 @pytest.fixture(scope="module")
