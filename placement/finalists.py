@@ -65,9 +65,10 @@ def _score(cost, anchors) -> float:
         return math.inf
 
 
-def best_distinct(res: PSOResult, count: int, exclude=()) -> list[int]:
-    """Indices of the ``count`` best particle layouts of a swarm (by their best cost,
-    finite only), distinct from each other and from the layouts ``exclude``."""
+def best_distinct(res: PSOResult, count: int | None, exclude=()) -> list[int]:
+    """Indices of the ``count`` best particle layouts of a swarm (None: all of them; by
+    their best cost, finite only), distinct from each other and from the layouts
+    ``exclude``."""
     picked: list[int] = []
     taken = [np.asarray(a, dtype=float) for a in exclude]
     for i in ties.order(res.pcost):

@@ -296,9 +296,10 @@ class Planner:
         self._lap("pso", res.nfev)
 
     def refine(self) -> None:
-        """The swarm's best ``search.fine_optima_for(M)`` distinct layouts, each refined on finer
-        lattices of the range table (:func:`placement.simselect.refine_on_table`). Simulated
-        costs whose starting layouts came from the search only."""
+        """The swarm's best ``search.fine_optima_for(M)`` distinct layouts (None: all of
+        them), each refined on finer lattices of the range table
+        (:func:`placement.simselect.refine_on_table`). Simulated costs whose starting layouts
+        came from the search only."""
         from placement.simselect import refine_on_table
 
         res, opt = self.swarm_result, self.search

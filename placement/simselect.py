@@ -10,7 +10,9 @@ simulation. The search (docs/model.md, "Range-table search"):
    scored in one batch and the best swap is taken if it lowers the cost. After
    ``patience`` such steps in a row without a gain, the best layout so far is kicked (two
    anchors moved to random neighbours) and the search goes on from there, until its
-   evaluation budget is spent. Several such chains run from different starts.
+   evaluation budget is spent. Several such chains run from different starts (with 4
+   anchors two of them from the room's corners layout and a spread layout,
+   :func:`spread_starts`).
 2. **Descent.** Each chain's best layout is finished by a best-improvement descent on the
    whole table, so every returned layout is a local optimum: no single swap of an anchor
    with one of its ``finish_neighbours`` nearest candidates lowers its cost.
@@ -226,6 +228,8 @@ AUTO_CANDIDATES = 1000
 #: the finest lattice of the default refinement (m)
 FINEST_SPACING = 0.1
 
+#: distinct search optima a plan starts from (the swarm's other particles start at random)
+DEFAULT_KEEP = 4
 #: the layouts' size up to which a plan starts from more search optima and refines them
 #: all: four anchors leave a fix no redundant range, so each anchor shapes the whole field
 #: and a layout's refined form can rank far from its form on the coarse candidate grid
@@ -246,7 +250,9 @@ class SearchOptions:
     draws, exact_draws, mount_tolerance : the table's draws (:func:`range_table`): how
         many, how many keep the nodes and planned points exactly, and the radius (m) of
         the mounting error in the others.
-    chains : independent stochastic searches, each from its own start.
+    chains : independent stochastic searches, each from its own start (the coverage and
+        sight selections' where there are any, then at M = 4 :func:`spread_starts`, then
+        the best of ``random_starts`` random layouts).
     chain_draws : the first draws the chains score layouts on (fewer is faster; the
         finishing descents and the fine lattices use every draw); None: as many of the
         exact draws as keep a chain's positioning work per layout at that of one draw
@@ -268,8 +274,8 @@ class SearchOptions:
     fine_optima : the swarm's best distinct layouts that a plan refines on the fine lattices,
         each on the table grown by its own columns; None (the default): one, or at M = 4
         every distinct layout of the swarm (:meth:`fine_optima_for`).
-    keep : distinct optima returned as seeds; None (the default): 4, or at M = 4
-        :data:`SMALL_M_KEEP` (:meth:`keep_for`).
+    keep : distinct optima returned as seeds; None (the default): :data:`DEFAULT_KEEP`, or
+        at M = 4 :data:`SMALL_M_KEEP` (:meth:`keep_for`).
     precision : the receiver DSP's precision for the table.
     coverage_k : in a room where walls, obstacles or the signal's reach hide candidates
         from some nodes, the first chain starts from the coverage selection that makes
@@ -354,18 +360,18 @@ class SearchOptions:
 
     def keep_for(self, M: int) -> int:
         """The distinct optima a plan of M anchors starts from: ``keep`` when given, else
-        4, or :data:`SMALL_M_KEEP` at M = 4 (:data:`SMALL_M`)."""
+        :data:`DEFAULT_KEEP`, or :data:`SMALL_M_KEEP` at M = 4 (:data:`SMALL_M`)."""
         if self.keep is not None:
             return self.keep
-        return SMALL_M_KEEP if M <= SMALL_M else 4
+        return SMALL_M_KEEP if M <= SMALL_M else DEFAULT_KEEP
 
-    def fine_optima_for(self, M: int) -> int:
+    def fine_optima_for(self, M: int) -> int | None:
         """The swarm's distinct layouts a plan of M anchors refines: ``fine_optima`` when
-        given, else one, or at M = 4 (:data:`SMALL_M`) every one (the starting layouts and
-        the swarm's own)."""
+        given, else one, or at M = 4 (:data:`SMALL_M`) None: every distinct layout of the
+        swarm, whatever its size."""
         if self.fine_optima is not None:
             return self.fine_optima
-        return self.keep_for(M) + 1 if M <= SMALL_M else 1
+        return None if M <= SMALL_M else 1
 
     def fine_spacings_for(self, room: Room) -> tuple[float, ...]:
         """The refinement's lattices (m) in ``room``: ``fine_spacings`` when given, else
@@ -555,6 +561,7 @@ def simulated_select(
     target = coverage_target(opt, cover, shadow)
     table = dataclasses.replace(table, coverage_target=target)
     starts = tuple(s.indices for s in (cover, seen) if s is not None)
+    starts += spread_starts(table, M)
     found = _run_chains(table, M, statistic, nbr, opt, seed, executor, workers, progress, starts)
     nfev = sum(r[3] for r in found)
     t2 = time.perf_counter()
@@ -630,10 +637,44 @@ def _sight_start(table, M: int, k: int):
     return select_coverage(V, M, min(K_FIX, M), groups=groups)
 
 
+def spread_starts(table: RangeTable, M: int) -> tuple[np.ndarray, ...]:
+    """Index layouts (M,) that start chains of a plan of at most :data:`SMALL_M` anchors
+    after the coverage and sight selections: the room's corners layout
+    (:meth:`simulation.Room.corners_layout`, the paper's unoptimized layout, on the nearest
+    candidates; where it has M distinct ones) and the spread layout (:func:`spread_layout`).
+    With 4 anchors a fix has no redundant range and the search's optima depend more on
+    where its chains start; these two starts reach layouts the random starts can miss
+    (docs/model.md, "Four anchors"). None from M = 5 on: an empty tuple."""
+    if M > SMALL_M:
+        return ()
+    out = []
+    corners = np.sort(_indices(table, table.room.corners_layout()))
+    if len(corners) == M and len(np.unique(corners)) == M:
+        out.append(corners)
+    out.append(spread_layout(table.candidates, M))
+    return tuple(out)
+
+
+def spread_layout(points: np.ndarray, M: int) -> np.ndarray:
+    """(M,) sorted indices of M of ``points`` (N, 3) spread by farthest-point sampling: the
+    point with the smallest x + y + z first, then each time the point farthest from those
+    chosen (near-ties to the lowest index, :mod:`placement.ties`)."""
+    p = np.asarray(points, dtype=float)
+    chosen = [ties.argmin(p.sum(axis=1))]
+    d = np.linalg.norm(p - p[chosen[0]], axis=1)
+    while len(chosen) < M:
+        d[chosen] = -np.inf  # never a point twice, even where points coincide
+        j = ties.argmin(-d)
+        chosen.append(j)
+        d = np.minimum(d, np.linalg.norm(p - p[j], axis=1))
+    return np.sort(np.array(chosen))
+
+
 def _indices(table: RangeTable, anchors: np.ndarray) -> np.ndarray:
-    """(M,) the table columns of anchors that are candidates of the table (within 1 mm)."""
+    """(M,) the table columns nearest anchors (M, 3): a layout of the table's candidates
+    (near-ties to the lowest column, :mod:`placement.ties`)."""
     d = np.linalg.norm(table.candidates[None] - anchors[:, None], axis=-1)
-    return np.argmin(d, axis=1)
+    return np.array([ties.argmin(row) for row in d], dtype=np.intp)
 
 
 def refine_on_table(

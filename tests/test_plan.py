@@ -11,7 +11,7 @@ from placement.finalists import FinalistOptions, score_finalists
 from placement.plan import LOCAL_SWARM, seed_then_pso
 from placement.pso import PSOOptions
 from placement.rangetable import node_draws, range_table, table_errors
-from placement.simselect import SMALL_M_KEEP, SearchOptions
+from placement.simselect import DEFAULT_KEEP, SMALL_M_KEEP, SearchOptions
 from placement.validation import Validation, ValidationOptions, validate_layout
 from simulation import Room
 
@@ -88,7 +88,9 @@ def test_seed_then_pso_simulated_chain_and_its_phases():
 def test_the_chosen_layout_is_the_finalist_with_the_lowest_cost_on_fresh_draws():
     res = _plan(finalists=FinalistOptions(count=3))
     f = res.finalists
-    assert {s.name for s in res.initial} <= {d["source"] for d in f}  # they always compete
+    # the starting layouts always compete (under a refined layout's name where the
+    # refinement left one where it was)
+    assert all(any(np.allclose(s.anchors, d["anchors"]) for d in f) for s in res.initial)
     assert any(d["source"].startswith("refined-") for d in f)  # so do the refined layouts
     assert not any(
         np.allclose(a["anchors"], b["anchors"]) for i, a in enumerate(f) for b in f[i + 1 :]
@@ -163,15 +165,17 @@ def test_each_refined_layout_is_refined_on_its_own_columns():
 
 def test_four_anchors_start_from_more_optima_and_refine_every_layout():
     """At M = 4 the defaults start the swarm from SMALL_M_KEEP search optima and refine
-    every distinct swarm layout; at M = 5 from 4 and one refined; given values win."""
-    assert (SMALL.keep_for(4), SMALL.fine_optima_for(4)) == (SMALL_M_KEEP, SMALL_M_KEEP + 1)
-    assert (SMALL.keep_for(5), SMALL.fine_optima_for(5)) == (4, 1)
+    every distinct swarm layout (None: however many particles the swarm has); at M = 5
+    from DEFAULT_KEEP and one refined; given values win."""
+    assert (SMALL.keep_for(4), SMALL.fine_optima_for(4)) == (SMALL_M_KEEP, None)
+    assert (SMALL.keep_for(5), SMALL.fine_optima_for(5)) == (DEFAULT_KEEP, 1)
     given = dataclasses.replace(SMALL, keep=2, fine_optima=3)
     assert (given.keep_for(4), given.fine_optima_for(4)) == (2, 3)
-    res = _plan(search=dataclasses.replace(SMALL, chains=6), swarm=_swarm(SMALL_M_KEEP, 1))
+    # a particle more than the search optima: it starts at random and is refined too
+    res = _plan(search=dataclasses.replace(SMALL, chains=6), swarm=_swarm(SMALL_M_KEEP + 1, 1))
     refined = [f["source"] for f in res.finalists if f["source"].startswith("refined")]
-    assert 1 < len(res.initial) <= SMALL_M_KEEP  # every particle a search optimum
-    assert len(refined) == len(res.initial)
+    assert 1 < len(res.initial) <= SMALL_M_KEEP
+    assert len(refined) == SMALL_M_KEEP + 1  # every particle distinct: all refined
 
 
 def test_the_mounting_tolerance_is_set_once_and_reaches_every_stage():

@@ -24,6 +24,8 @@ from placement.simselect import (
     nearest,
     refine_on_table,
     simulated_select,
+    spread_layout,
+    spread_starts,
 )
 from placement.surfaces import MAX_ANCHORS, candidate_grid, on_surfaces, surface_index
 from simulation import Room
@@ -159,6 +161,31 @@ def test_simulated_select_returns_local_optima_better_than_random():
     assert costs == sorted(costs) and costs[0] == sel.cost
     d = json.loads(json.dumps(sel.to_dict()))
     assert d["indices"] == sel.indices.tolist() and d["nfev"] == sel.nfev > 0
+
+
+def test_spread_layout_is_farthest_point_sampling_with_stable_ties():
+    line = np.column_stack([np.arange(11.0), np.zeros(11), np.zeros(11)])
+    np.testing.assert_array_equal(spread_layout(line, 3), [0, 5, 10])
+    box = np.array(list(itertools.product([0.0, 1.0], repeat=3)))  # corner 0 first, 7 next
+    np.testing.assert_array_equal(spread_layout(box, 2), [0, 7])
+    # the six other corners tie at 1 m from the two chosen: the lowest index wins, and a
+    # difference in the last digits (another machine's rounding) does not change it
+    nudged = box.copy()
+    nudged[1, 2] -= 1e-12  # a plain argmax would take corner 2
+    for pts in (box, nudged):
+        np.testing.assert_array_equal(spread_layout(pts, 3), [0, 1, 7])
+    twice = np.repeat(box[:2], 3, axis=0)  # two distinct points, each three times
+    assert len(set(spread_layout(twice, 4))) == 4
+
+
+def test_four_anchor_searches_also_start_from_the_corners_and_the_spread_layout():
+    t = range_table(ROOM, candidate_grid(ROOM, 0.4), NODES, draws=1, exact_draws=1, rng=0)
+    corners, spread = spread_starts(t, 4)
+    gaps = np.linalg.norm(ROOM.corners_layout()[:, None] - t.candidates[corners][None], axis=-1)
+    assert np.all(gaps.min(axis=1) < 0.3)  # each corner anchor on a candidate near it
+    np.testing.assert_array_equal(spread, spread_layout(t.candidates, 4))
+    assert len(np.unique(np.concatenate([corners, spread]))) > 4  # two different starts
+    assert spread_starts(t, 5) == ()
 
 
 def test_simulated_select_is_the_same_serially_with_an_executor_and_any_workers():
