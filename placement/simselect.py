@@ -644,7 +644,7 @@ def spread_starts(table: RangeTable, M: int) -> tuple[np.ndarray, ...]:
     candidates; where it has M distinct ones) and the spread layout (:func:`spread_layout`).
     With 4 anchors a fix has no redundant range and the search's optima depend more on
     where its chains start; these two starts reach layouts the random starts can miss
-    (docs/model.md, "Four anchors"). None from M = 5 on: an empty tuple."""
+    (docs/model.md, "Four anchors"). From M = 5 on, no start (an empty tuple)."""
     if M > SMALL_M:
         return ()
     out = []
