@@ -68,14 +68,14 @@ def with_room_chirp(system, own):
     return system.with_signal(duration=own.chirp.duration, t_wake=system.receiver.t_wake + shift)
 
 
-def field_draws(room, anchors, system, draws: int) -> np.ndarray:
+def field_draws(room, anchors, system, draws: int, seed: int = 7) -> np.ndarray:
     """(2, 300 draws) the field errors (m) of ``anchors`` and whether each fix is verified
     (1.0, else 0.0): ``draws`` draws of the field check (300 random tags in the zones,
-    anchors mounted within 3 cm, one noise realization, the streams of seed 7;
+    anchors mounted within 3 cm, one noise realization, the streams of ``seed``;
     ``placement.validation.field_errors``)."""
     from placement.validation import field_errors
 
-    return np.concatenate([field_errors(room, anchors, 300, 0.03, d, 7, system=system)
+    return np.concatenate([field_errors(room, anchors, 300, 0.03, d, seed, system=system)
                            for d in range(draws)], axis=1)  # fmt: skip
 
 

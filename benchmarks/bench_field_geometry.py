@@ -9,12 +9,14 @@ Run:
 
 The layout (a plan's layout.json, or a sweep's layouts.json with ``--M``) is evaluated in
 the field as ``bench_against_naive.py`` does (``--draws`` draws of 300 random tags in the
-zones, anchors mounted within 3 cm, one noise realization, the same streams). For each tag
+zones, anchors mounted within 3 cm, one noise realization, the same streams; other draws
+with ``--seed``). For each tag
 it counts the anchors in line of sight and reach and their dilution of precision, GDOP =
 √tr (HᵀH)⁻¹ over those anchors only (∞ with fewer than 3 or a singular H). JSON lines: one
 per count of anchors in line of sight (tags, median error, verified share), one per GDOP
 band (share of the tags, share of the squared error, median error), and a summary (median,
-mean, P95, RMS, GDOP percentiles).
+mean, P95, RMS, the share of verified fixes and of those more than 0.5 m off, GDOP
+percentiles).
 """
 
 from __future__ import annotations
@@ -31,6 +33,8 @@ from placement.validation import field_errors, field_tags
 #: the field check's seed, as in bench_against_naive.py
 SEED = 7
 TAGS = 300
+#: a verified fix farther than this (m) from its tag is a wrong one (issue 40's 0.5 m)
+WRONG = 0.5
 
 
 def load_layout(path: str, M: int | None) -> np.ndarray:
@@ -44,12 +48,13 @@ def load_layout(path: str, M: int | None) -> np.ndarray:
     return np.asarray(data[str(M)], dtype=float)
 
 
-def tag_geometry(room, system, anchors, draws: int):
-    """Per tag of the field draws: errors (m), verified, anchors in sight (n,), GDOP (n,)."""
+def tag_geometry(room, system, anchors, draws: int, seed: int = SEED):
+    """Per tag of the field draws (of ``seed``): errors (m), verified, anchors in sight
+    (n,), GDOP (n,)."""
     parts = []
     for d in range(draws):
-        E = field_errors(room, anchors, TAGS, 0.03, d, SEED, system=system)
-        tags = field_tags(room, TAGS, d, SEED)  # the tags of field_errors' draw d
+        E = field_errors(room, anchors, TAGS, 0.03, d, seed, system=system)
+        tags = field_tags(room, TAGS, d, seed)  # the tags of field_errors' draw d
         seen = sight(room, system, anchors, tags)  # line of sight and reach
         g = peb(anchors, tags, sigma=np.where(seen, 1.0, np.inf))  # GDOP of the seen
         parts.append((E[0], E[1] > 0, seen.sum(axis=1), g))
@@ -61,13 +66,16 @@ def main() -> None:
     ap.add_argument("layout", help="a plan's layout.json or a sweep's layouts.json")
     ap.add_argument("--M", type=int, default=None, help="the sweep's M (layouts.json)")
     ap.add_argument("--draws", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=SEED,
+                    help=f"the field draws' seed ({SEED}, bench_against_naive.py's)")  # fmt: skip
     args = ap.parse_args()
     room, system = room_and_system(args)
     anchors = load_layout(args.layout, args.M)
-    e, verified, seen, g = tag_geometry(room, system, anchors, args.draws)
+    e, verified, seen, g = tag_geometry(room, system, anchors, args.draws, args.seed)
     ok = np.isfinite(e)
     e2 = np.where(ok, e, 0.0) ** 2
-    tag = {"room": room.name, "system": system.name, "layout": args.layout, "M": len(anchors)}
+    tag = {"room": room.name, "system": system.name, "layout": args.layout,
+           "M": len(anchors), "seed": args.seed}  # fmt: skip
     for k in np.unique(seen):
         s = (seen == k) & ok
         if s.any():
@@ -82,7 +90,9 @@ def main() -> None:
     emit("field_geometry", **tag, tags=int(e.size), fixes=int(ok.sum()),
          median=float(np.median(e[ok])), mean=float(e[ok].mean()),
          p95=float(np.percentile(e[ok], 95)), rms=float(np.sqrt(e2[ok].mean())),
-         verified=float(verified.mean()), gdop_median=float(np.median(gf)),
+         verified=float(verified.mean()),
+         verified_wrong=float(np.mean(e[verified] > WRONG)) if verified.any() else 0.0,
+         gdop_median=float(np.median(gf)),
          gdop_p90=float(np.percentile(gf, 90)), gdop_p97=float(np.percentile(gf, 97)),
          no_gdop=float(np.mean(~np.isfinite(g))))  # fmt: skip
 
