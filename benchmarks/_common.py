@@ -68,7 +68,11 @@ def with_room_chirp(system, own):
     return system.with_signal(duration=own.chirp.duration, t_wake=system.receiver.t_wake + shift)
 
 
-def field_draws(room, anchors, system, draws: int, seed: int = 7) -> np.ndarray:
+#: the field draws' seed of the benchmarks that evaluate layouts in the field (``--seed``)
+FIELD_SEED = 7
+
+
+def field_draws(room, anchors, system, draws: int, seed: int = FIELD_SEED) -> np.ndarray:
     """(2, 300 draws) the field errors (m) of ``anchors`` and whether each fix is verified
     (1.0, else 0.0): ``draws`` draws of the field check (300 random tags in the zones,
     anchors mounted within 3 cm, one noise realization, the streams of ``seed``;
