@@ -495,17 +495,23 @@ def sees_near(geo, p, q, front, delta, every) -> bool:  # pragma: no cover - com
     one of them (``every`` False: a position known to within centimetres does not hide an
     anchor it grazes) or from all (``every`` True: the anchor surely sees it); only the
     faces of the map that the anchor q (3,) faces are tested (``front`` (F,),
-    :func:`facing`)."""
-    kind, normal, d, box, _, plan = geo
+    :func:`facing`). A point across a face of the map from p (in a wall or an obstacle
+    beside a position near it) is no place the tag can be, and is not tested. ``geo``: the
+    room's map (:func:`blocking_map`), or a tuple that begins with it."""
+    kind, normal, d, box, blocking, plan = geo[0], geo[1], geo[2], geo[3], geo[4], geo[5]
     if kind.shape[0] == 0:
         return True
     for k in range(7):
         o0 = delta * ((k == 1) - (k == 2))
         o1 = delta * ((k == 3) - (k == 4))
         o2 = delta * ((k == 5) - (k == 6))
-        free = not _blocked(p[0] + o0, p[1] + o1, p[2] + o2, q[0], q[1], q[2], kind, normal,
-                            d, box, front, plan, -1, -1)  # fmt: skip
+        n0, n1, n2 = p[0] + o0, p[1] + o1, p[2] + o2
+        free = not _blocked(n0, n1, n2, q[0], q[1], q[2], kind, normal, d, box, front, plan, -1,
+                            -1)  # fmt: skip
         if free != every:
+            if k > 0 and _blocked(p[0], p[1], p[2], n0, n1, n2, kind, normal, d, box,
+                                  blocking, plan, -1, -1):  # fmt: skip
+                continue  # the point is in a wall or an obstacle: it decides nothing
             return free
     return every
 

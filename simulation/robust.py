@@ -52,7 +52,11 @@ schemes (Casas et al., 2006):
    wrong one that agrees by chance: T is penalized by :data:`MISS_PENALTY` for each miss
    the contradictions forgive (below) and by :data:`HELD_PENALTY` for a fix held at the
    room's boundary (:func:`_ranked`). The minimal sets are solved for this only once the
-   search has found no such set of 5;
+   search has found no such set of 5. Where the fix is still contradicted, the tag may
+   see only 3 anchors: their ranges fix two mirror images, and the least contradicted
+   image of any 3 heard anchors, then the less penalized, is the fix when it is less
+   contradicted (:func:`_triples`: a column hides all but 3 anchors from a sliver behind
+   it, and the echoes of the others are then long ranges to anchors that do not see it);
 5. the fix grows (:func:`_grow`): each heard anchor left out whose range is within
    :data:`LOOSE` of its distance from the fix, the nearest first, joins it when the fix on
    the larger set still passes the test with no contradiction (a dropping step or the
@@ -64,12 +68,13 @@ A fix's contradictions are its ranges shorter than their distance by more than
 :data:`SHORT` (no path is shorter than the direct one) and, where the positioning knows the
 room's map (walls of a floor plan that is not convex, obstacles;
 :func:`simulation.polyhedral.blocking_map`), two more. A fix that rests on an anchor that
-does not see it (from the fix or from any point :data:`GRAZE` from it along the axes) rests
-on an echo: the echoes off one face agree with each other at the mirror image of the tag,
-as direct ranges would. And an anchor that surely sees the fix (from it and from all those
-points) hears its direct path: beyond the first :data:`MISSES`, each such anchor whose
-range is longer than its distance by more than :data:`LOOSE` contradicts the fix (a mirror
-image above the racks is seen by every anchor, with echo ranges). A short range outweighs
+does not see it (from the fix or from any point :data:`GRAZE` from it along the axes, but
+those across a face from it, in a wall or an obstacle) rests on an echo: the echoes off one
+face agree with each other at the mirror image of the tag, as direct ranges would. And an
+anchor that surely sees the fix (from it and from all those points) hears its direct path:
+beyond the first :data:`MISSES`, each such anchor whose range is longer than its distance
+by more than :data:`LOOSE` contradicts the fix (a mirror image above the racks is seen by
+every anchor, with echo ranges). A short range outweighs
 any number of what the map says (:func:`_contradictions`): it is physics, the map may be
 coarse.
 
@@ -84,9 +89,9 @@ b‖k_j‖, k_j the column j of (UᵀU)⁻¹Uᵀ, so the protection level is
 σ √λ max_j ‖k_j‖/√(1 − h_jj), λ the non-centrality the test misses (:func:`bias_scales`).
 With a range σ of centimetres that is centimetres where 5 anchors surround the tag; with
 the decimetres of a peak-pick receiver, metres: its fixes cannot be vouched for.
-**Unverified** (:data:`UNVERIFIED`) when only 4 remain (no redundancy to tell an echo), no
-subset passes, or the bound is not met; **no fix** (:data:`NO_FIX`) with fewer than 4
-heard anchors.
+**Unverified** (:data:`UNVERIFIED`) when only 4 remain (no redundancy to tell an echo), or
+3 (step 4's last resort), no subset passes, or the bound is not met; **no fix**
+(:data:`NO_FIX`) with fewer than 4 heard anchors.
 """
 
 from __future__ import annotations
@@ -120,8 +125,9 @@ from simulation.polyhedral import sees_near
 NO_FIX, UNVERIFIED, VERIFIED = 0, 1, 2
 QUALITY = {
     NO_FIX: "no fix: fewer than 4 anchors heard",
-    UNVERIFIED: "unverified: 4 consistent anchors (no redundancy), none consistent, or an "
-    "echo the test misses could move the fix beyond the alert limit",
+    UNVERIFIED: "unverified: 4 consistent anchors (no redundancy), 3 that nothing "
+    "contradicts, none consistent, or an echo the test misses could move the fix beyond the "
+    "alert limit",
     VERIFIED: "verified: 5 or more anchors consistent to the range sigma, the fix within "
     "the alert limit of any echo the test misses",
 }
@@ -155,6 +161,8 @@ MISSES = 2
 #: the largest normalized residual T of a minimal set taken where no 5 anchors agree: its 4
 #: ranges agree to about 7 cm (anchors are mounted within centimetres of the plan)
 MINIMAL_T = 200.0
+#: the most sets of 3 anchors step 4's last resort tries (:func:`_triples`; 10 heard: all)
+TRIPLES = 120
 #: the anchors step 5 may try to add to a fix and refuse before it stops
 GROW_TRIES = 2
 #: a bound no count of contradictions reaches
@@ -298,7 +306,7 @@ def robust_rows(
             )  # fmt: skip  # step 4
         T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
                             xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, gr,
-                            trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 4 here)
+                            trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 3 here)
         status[b] = fst[0]
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
@@ -542,9 +550,17 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
         four_ev, four_T, four_st, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol, sigma,
         short, loose, work, geo,
     )  # fmt: skip
-    return _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, best_st,
-                     four, four_x, four_short, four_ev, four_T, four_st, used, fst, trial, short,
-                     loose, geo, lo, hi, poly)  # fmt: skip
+    T, n, iters, now = _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T,
+                                 best_st, four, four_x, four_short, four_ev, four_T, four_st,
+                                 used, fst, trial, short, loose, geo, lo, hi, poly)  # fmt: skip
+    if now > 0 and _triples(ab, rho0, x, now, order, h, trial, xt, xm, best_x, short, loose,
+                            geo, lo, hi, poly):  # fmt: skip
+        for j in range(M):
+            used[j] = trial[j] == trial[j]
+        c3, fst[0], it = lm_solve(ab, trial, x, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                                  xtol, ftol, gtol, *work)  # fmt: skip
+        return 2.0 * c3 / (sigma * sigma), 3, iters + it
+    return T, n, iters
 
 
 @numba.njit(cache=True, inline="always")
@@ -623,7 +639,8 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
     the best minimal set (its ranges in four (M,), fix four_x (3,), contradictions,
     penalty, T and status) replaces it when its 4 ranges agree and it is less contradicted,
     or as little and with a smaller T plus penalty (:func:`_ranked`, in the box [lo, hi] and
-    the floor plan ``poly``; ``trial`` (M,): scratch). Returns (T, n, iterations)."""
+    the floor plan ``poly``; ``trial`` (M,): scratch). Returns (T, n, iterations, the
+    contradictions of the fix)."""
     if best_in >= 5:
         now, T, n, ev = best_short, best_T, best_in, 0.0  # a set of 5 that something contradicts
         put(x, best_x)
@@ -638,8 +655,75 @@ def _fallback(ab, rho0, x, T, n, iters, best_x, best_short, best_in, best_T, bes
         fst[0] = four_st
         for j in range(used.shape[0]):
             used[j] = four[j] == four[j]
-        return four_T, 4, iters
-    return T, n, iters
+        return four_T, 4, iters, four_short
+    return T, n, iters, now
+
+
+@numba.njit(cache=True)
+def _triples(ab, rho0, x, now, order, h, trial, xt, xm, xb, short, loose, geo, lo, hi, poly):
+    # pragma: no cover - compiled
+    """Step 4's last resort, where every fix of 4 or more anchors is contradicted (the fix
+    so far x (3,), ``now`` contradictions): the tag may see only 3 anchors, which fix two
+    mirror images in their plane (:func:`simulation.least_squares.mirror_fixes`), the
+    others' ranges echoes. Of the images of every 3 heard anchors (the first h of
+    ``order``, nearest ranges first), each moved into the box [lo, hi] and the floor plan
+    ``poly``, the one least contradicted (:func:`_ranked`: an echo range shorter than its
+    distance, one of the 3 hidden from it on the map, an anchor that surely sees it with
+    an echo range), then with the smaller penalty, replaces x when it is less contradicted
+    than x; its 3 ranges are then in trial (M,) (xt, xm, xb (3,): scratch). Returns
+    whether it did."""
+    # a short range counts M + 1 and the map at most M: only the images with the fewest
+    # short ranges can rank first, and the map is read for those alone
+    M = ab.shape[0]
+    c, chosen = np.arange(3), np.empty(3, np.int64)
+    fewest = INFINITE
+    for _ in range(TRIPLES):
+        if _images(ab, rho0, order, c, trial, xt, xm, lo, hi, poly):
+            fewest = min(fewest, _score(ab, rho0, xt, 0.0, short)[1],
+                         _score(ab, rho0, xm, 0.0, short)[1])  # fmt: skip
+        if not _next_colex(c, h):
+            break
+    if fewest * (M + 1) >= now:
+        return False
+    best, best_ev, found = now, math.inf, False
+    c[:] = np.arange(3)
+    for _ in range(TRIPLES):
+        if _images(ab, rho0, order, c, trial, xt, xm, lo, hi, poly):
+            for image in range(2):
+                p = xt if image == 0 else xm
+                if _score(ab, rho0, p, 0.0, short)[1] > fewest:
+                    continue
+                nshort, ev = _ranked(ab, rho0, trial, p, short, loose, geo, best, lo, hi, poly)
+                if nshort < best or (nshort == best and found and ev < best_ev):
+                    best, best_ev, found = nshort, ev, True
+                    put(xb, p)
+                    for i in range(3):
+                        chosen[i] = order[c[i]]
+        if not _next_colex(c, h):
+            break
+    if not found:
+        return False
+    fill(trial, np.nan)
+    for i in range(3):
+        trial[chosen[i]] = rho0[chosen[i]]
+    put(x, xb)
+    return True
+
+
+@numba.njit(**NO_REFCOUNT)
+def _images(ab, rho0, order, c, trial, xt, xm, lo, hi, poly) -> bool:
+    # pragma: no cover - compiled
+    """trial (M,) the ranges of rho0 (M,) of the anchors order[c] (c (3,)) and xt, xm (3,)
+    the two mirror images they fix (:func:`simulation.least_squares.mirror_fixes`), each
+    moved into the box [lo, hi] and the floor plan ``poly``; False: the 3 are collinear."""
+    fill(trial, np.nan)
+    for i in range(3):
+        trial[order[c[i]]] = rho0[order[c[i]]]
+    if not mirrors(normal_equations(ab, trial), ab, trial, xt, xm, 0.0):
+        return False
+    _outside(xt, lo, hi, poly)
+    _outside(xm, lo, hi, poly)
+    return True
 
 
 @numba.njit(cache=True)
@@ -875,9 +959,9 @@ def _map_evidence(ab, rho0, kept, x, short, long, geo, bound):  # pragma: no cov
 @numba.njit(cache=True, inline="always")
 def row_map(geo, front):  # pragma: no cover - compiled
     """The map of one layout's rows: the room's map ``geo``
-    (:func:`simulation.polyhedral.blocking_map`) with, in place of its blocking mask, the
-    faces each anchor faces, front (M, F) (:func:`simulation.polyhedral.facing`)."""
-    return (geo[0], geo[1], geo[2], geo[3], front, geo[5])
+    (:func:`simulation.polyhedral.blocking_map`) and, after it, the faces each anchor
+    faces, front (M, F) (:func:`simulation.polyhedral.facing`)."""
+    return (geo[0], geo[1], geo[2], geo[3], geo[4], geo[5], front)
 
 
 @numba.njit(cache=True, inline="always")
@@ -885,7 +969,7 @@ def _sees(geo, x, ab, j, every) -> bool:  # pragma: no cover - compiled
     """Anchor j of ab (M, 3) sees the position x (3,) from one of the points :data:`GRAZE`
     from it (``every`` False) or from all (True) (:func:`simulation.polyhedral.sees_near`);
     ``geo`` the row's map (:func:`row_map`)."""
-    return sees_near(geo, x, ab[j], geo[4][j], GRAZE, every)
+    return sees_near(geo, x, ab[j], geo[6][j], GRAZE, every)
 
 
 @numba.njit(**NO_REFCOUNT)

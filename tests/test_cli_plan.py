@@ -108,3 +108,13 @@ def test_least_squares_in_a_room_that_hides_anchors_prints_the_echo_note():
     for name in ("l-shaped-lab-recommended", "techtile"):
         res = PlacementResult.read(examples / name)
         assert echo_note(res.room, res.system, res.validation) is None
+
+
+def test_a_share_short_of_all_never_reads_100_percent():
+    # the sight selection of the L-lab covers 1 999 of its 2 000 sight points: "100.0 %"
+    # would claim all of them
+    from placement.cli.plan import percent
+
+    assert percent(1999 / 2000) == "99.95" and percent(1.0) == "100.0"
+    assert percent(0.9764705882352941) == "97.6" and percent(0.0) == "0.0"
+    assert percent(1 / 2500) == "0.04"

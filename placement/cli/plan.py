@@ -302,6 +302,16 @@ def run(args, progress=None) -> int:
     return 0
 
 
+def percent(share: float) -> str:
+    """``share`` (0–1) in per cent to 0.1, with more decimals where that would read 100.0
+    (or 0.0) for a share that is not all (or none): 1 point of 2 000 left out reads 99.95."""
+    for digits in range(1, 5):
+        text = f"{100 * share:.{digits}f}"
+        if (share >= 1 or float(text) < 100) and (share <= 0 or float(text) > 0):
+            return text
+    return text
+
+
 def _print_result(res, args) -> None:
     from numpy import array_equal
 
@@ -312,9 +322,9 @@ def _print_result(res, args) -> None:
     picks = [("coverage", "the nodes", cover), ("sight", "the room's random tag points",
                                                 search.get("sight"))]  # fmt: skip
     for n, (name, points, sel) in enumerate(p for p in picks if p[2]):
-        print(f"{name} selection: {100 * sel['covered']:.1f} % of {points} see {sel['k']} "
-              f"anchors in line of sight and reach (bound {100 * sel['bound']:.1f} %, "
-              f"{sel['status']}; greedy {100 * sel['greedy']:.1f} %): the "
+        print(f"{name} selection: {percent(sel['covered'])} % of {points} see {sel['k']} "
+              f"anchors in line of sight and reach (bound {percent(sel['bound'])} %, "
+              f"{sel['status']}; greedy {percent(sel['greedy'])} %): the "
               f"{('first', 'second')[n]} search chain's start")  # fmt: skip
     share, target = res.settings.search.min_coverage, search.get("coverage_target")
     if target and target.get("shadow_error"):
