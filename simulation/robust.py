@@ -555,12 +555,22 @@ def _consensus(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, 
                                  used, fst, trial, short, loose, geo, lo, hi, poly)  # fmt: skip
     if now > 0 and _triples(ab, rho0, x, now, order, h, trial, xt, xm, best_x, short, loose,
                             geo, lo, hi, poly):  # fmt: skip
-        for j in range(M):
-            used[j] = trial[j] == trial[j]
-        c3, fst[0], it = lm_solve(ab, trial, x, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
-                                  xtol, ftol, gtol, *work)  # fmt: skip
-        return 2.0 * c3 / (sigma * sigma), 3, iters + it
+        return _on_three(ab, trial, x, used, fst, iters, lo, hi, bounded, poly, max_iter, xtol,
+                         ftol, gtol, sigma, work)  # fmt: skip
     return T, n, iters
+
+
+@numba.njit(**NO_REFCOUNT)
+def _on_three(ab, trial, x, used, fst, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+              sigma, work):  # fmt: skip  # pragma: no cover - compiled
+    """The fix x (3,) solved by least squares on the 3 ranges in trial (M,) that
+    :func:`_triples` chose (used (M,) their anchors, fst (1,) the solve's status); returns
+    (T, 3, iterations)."""
+    for j in range(used.shape[0]):
+        used[j] = trial[j] == trial[j]
+    c3, fst[0], it = lm_solve(ab, trial, x, lo, hi, bounded, poly, min(max_iter, SUBSET_ITER),
+                              xtol, ftol, gtol, *work)  # fmt: skip
+    return 2.0 * c3 / (sigma * sigma), 3, iters + it
 
 
 @numba.njit(cache=True, inline="always")
