@@ -11,6 +11,7 @@ from pathlib import Path
 
 from analysis.figures import png_bytes, sweep_curves
 from analysis.paper import TABLE1
+from analysis.percent import percent
 from simulation.output import write_file
 
 
@@ -19,7 +20,7 @@ def _num(v) -> str:
 
 
 def _share(v) -> str:
-    return "–" if v is None or v != v else f"{100 * v:.2f} %"
+    return "–" if v is None or v != v else f"{percent(v, 2)} %"
 
 
 def sweep_html(data: dict, dpi: float = 100) -> str:

@@ -113,8 +113,18 @@ def test_least_squares_in_a_room_that_hides_anchors_prints_the_echo_note():
 def test_a_share_short_of_all_never_reads_100_percent():
     # the sight selection of the L-lab covers 1 999 of its 2 000 sight points: "100.0 %"
     # would claim all of them
-    from placement.cli.plan import percent
+    from analysis.percent import percent
 
     assert percent(1999 / 2000) == "99.95" and percent(1.0) == "100.0"
     assert percent(0.9764705882352941) == "97.6" and percent(0.0) == "0.0"
     assert percent(1 / 2500) == "0.04"
+    # an availability to 2 decimals: 1 realization of 100 000 without a fix is not "100.00"
+    from placement.cli.common import availability_note
+
+    assert percent(1 - 1e-5, 2) == "99.999" and percent(1e-5, 2) == "0.001"
+    note = availability_note({"availability": 1 - 1e-5})
+    assert note == ", availability 99.999 % (0.001 % without a fix)"
+    assert (
+        availability_note({"availability": 0.992})
+        == ", availability 99.20 % (0.80 % without a fix)"
+    )

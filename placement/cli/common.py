@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.percent import percent
 from placement.serialization import to_jsonable
 from simulation import checks
 from simulation.dxf import UNITS, room_from_dxf
@@ -288,7 +289,7 @@ def availability_note(summary: dict) -> str:
         return ""
     if a >= 1:
         return ", availability 100 %"
-    return f", availability {100 * a:.2f} % ({100 * (1 - a):.2f} % without a fix)"
+    return f", availability {percent(a, 2)} % ({percent(1 - a, 2)} % without a fix)"
 
 
 def load_layout(path: str, room: Room, min_anchors: int = 4) -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from analysis.percent import percent
 from placement.cli.common import (
     add_room_argument,
     add_system_arguments,
@@ -87,7 +88,7 @@ def run(args) -> int:
     print("Euclidean position error in metres over the fixes of all nodes and realizations:")
     # what the tags see first (and a robust system's verified share), then sigma
     robust = system.positioning.method == "robust"
-    verified = f"  verified {100 * ev.verified:.1f} %" if robust else ""
+    verified = f"  verified {percent(ev.verified)} %" if robust else ""
     print(
         f"  median {st['median']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}{verified}  "
         f"std {st['std']:.4f}  rms {st['rms']:.4f}  max {st['max']:.4f}" + availability_note(st)

@@ -7,6 +7,7 @@ import dataclasses
 import re
 import time
 
+from analysis.percent import percent
 from placement.cli.common import (
     add_effort_argument,
     add_room_argument,
@@ -302,16 +303,6 @@ def run(args, progress=None) -> int:
     return 0
 
 
-def percent(share: float) -> str:
-    """``share`` (0–1) in per cent to 0.1, with more decimals where that would read 100.0
-    (or 0.0) for a share that is not all (or none): 1 point of 2 000 left out reads 99.95."""
-    for digits in range(1, 5):
-        text = f"{100 * share:.{digits}f}"
-        if (share >= 1 or float(text) < 100) and (share <= 0 or float(text) > 0):
-            return text
-    return text
-
-
 def _print_result(res, args) -> None:
     from numpy import array_equal
 
@@ -387,9 +378,9 @@ def coverage_note(res) -> str | None:
         return None
     if cover["covered"] < COVERAGE_NOTE or v.covered >= COVERAGE_NOTE:
         return None
-    field = "" if v.field is None else f" (verified in the field: {100 * v.field.verified:.1f} %)"
-    return (f"note: {100 * v.covered:.1f} % of the nodes see {v.coverage_k} anchors in line of "
-            f"sight and reach, where the coverage selection covers {100 * cover['covered']:.1f} "
+    field = "" if v.field is None else f" (verified in the field: {percent(v.field.verified)} %)"
+    return (f"note: {percent(v.covered)} % of the nodes see {v.coverage_k} anchors in line of "
+            f"sight and reach, where the coverage selection covers {percent(cover['covered'])} "
             f"% with {res.settings.M}: a fix is verified only where {v.coverage_k} consistent "
             f"anchors are heard{field}. --min-coverage {COVERAGE_NOTE:g} keeps every layout to "
             f"that share (it can cost field P95 elsewhere: BENCHMARKS.md, \"A coverage target "
@@ -434,7 +425,7 @@ def _print_validation(v, robust: bool = False) -> None:
     print(f"validation, {v.realizations} realizations at the {len(v.per_node['rmse'])} nodes: "
           + _stats(v, robust))  # fmt: skip
     if v.covered == v.covered:
-        print(f"  line of sight: {100 * v.covered:.1f} % of the nodes see {v.coverage_k} or "
+        print(f"  line of sight: {percent(v.covered)} % of the nodes see {v.coverage_k} or "
               "more anchors in line of sight and reach")  # fmt: skip
     if v.held_out is not None:
         for d, what in ((v.held_out.grid, "held-out grid"), (v.held_out.random, "random points")):
@@ -449,7 +440,7 @@ def _stats(s, robust: bool = False) -> str:
     """ "median … m, mean … m, P95 … m[, verified … %], sigma … m" and the availability of
     a summary: what a user's tags see first (the share of verified fixes for a system that
     verifies them, ``robust``), the paper's σ after."""
-    verified = f", verified {100 * s.verified:.1f} %" if robust else ""
+    verified = f", verified {percent(s.verified)} %" if robust else ""
     return (f"median {s.median:.3f} m, mean {s.mean:.3f} m, P95 {s.p95:.3f} m{verified}, "
             f"sigma {s.std:.3f} m"
             + availability_note({"availability": s.availability}))  # fmt: skip

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import time
 
+from analysis.percent import percent
 from placement.cli.common import load_plan, output_file, plan_system
 from simulation import checks
 from simulation.output import write_file
@@ -61,9 +62,9 @@ def _print(res, robust: bool) -> None:
     head = "  median    mean     P95" + ("  verified" if robust else "") + "   sigma  availability"
 
     def cells(r) -> str:
-        verified = f"  {100 * r['verified']:6.1f} %" if robust else ""
+        verified = f"  {percent(r['verified']):>6} %" if robust else ""
         return (f"  {r['median']:6.3f}  {r['mean']:6.3f}  {r['p95']:6.3f}{verified}  "
-                f"{r['std']:6.3f}  {100 * r['availability']:10.2f} %")  # fmt: skip
+                f"{r['std']:6.3f}  {percent(r['availability'], 2):>10} %")  # fmt: skip
 
     print(f"one anchor down     {head}  hearing >= 4")
     for r in res.anchor_down:

@@ -8,6 +8,7 @@ import math
 import re
 import time
 
+from analysis.percent import percent
 from placement.cli.common import (
     add_effort_argument,
     add_room_argument,
@@ -107,7 +108,7 @@ def design_table(summary: list[dict]) -> str:
         field = "/".join(number(d[k], ".3f") for k in ("field_median", "field_mean", "field_p95"))
         lines.append(
             f" {d['design']:18s} {d['M']:2d}   {field:<21s}  {d['std']:6.3f}  {d['mean']:6.3f}"
-            f"  {d['p95']:6.3f}  {100 * d['availability']:10.2f} %  {d['samples_per_fix']:11d}"
+            f"  {d['p95']:6.3f}  {percent(d['availability'], 2):>10} %  {d['samples_per_fix']:11d}"
         )
     return "\n".join(lines)
 
@@ -118,12 +119,12 @@ def row_line(row) -> str:
     availability at the evaluation nodes; the nodes' mean, σ, P95 and availability without
     a field check."""
     nodes = (
-        f"sigma {row.std:.3f} m, P95 {row.p95:.3f} m, availability {100 * row.availability:.2f} %"
+        f"sigma {row.std:.3f} m, P95 {row.p95:.3f} m, availability {percent(row.availability, 2)} %"
     )
     if not math.isfinite(row.field_median):
         return f"mean {row.mean:.3f} m, {nodes}"
     verified = (
-        f", verified {100 * row.field_verified:.1f} %" if math.isfinite(row.field_verified) else ""
+        f", verified {percent(row.field_verified)} %" if math.isfinite(row.field_verified) else ""
     )
     return (
         f"field median {row.field_median:.3f} m, mean {row.field_mean:.3f} m, "
@@ -248,7 +249,7 @@ def _print_table(res, paper) -> None:
         print(
             f"{r.M:2d}  {number(r.field_median, '7.3f')}/{number(r.field_mean, '.3f')}/"
             f"{number(r.field_p95, '<7.3f')}  {r.std:6.3f}  {r.mean:6.3f}  {r.p95:6.3f}  "
-            f"{100 * r.availability:10.2f} %  {100 * r.covered:6.1f} % k={r.coverage_k}"
+            f"{percent(r.availability, 2):>10} %  {percent(r.covered):>6} % k={r.coverage_k}"
             f"  {number(r.held_out_std, '14.3f')}{ref}"
         )
     goal = f"availability >= {100 * res.target_availability:g} %"
