@@ -1,4 +1,5 @@
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -71,3 +72,19 @@ def test_evaluate_bad_layouts_exit_2(tmp_path, capsys):
     assert main(["evaluate", "--layout", str(layout), "--realizations", "0", "--out", out]) == 2
     assert "--realizations" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_a_layout_with_no_fix_anywhere_says_so_without_nan(tmp_path, capsys):
+    # the naive 8 anchors of the 24 x 16 m hall with the recommended system: no node hears 4
+    from placement import naive_layout
+
+    hall = Path(__file__).resolve().parents[1] / "examples" / "hall.toml"
+    layout = _layout(tmp_path, naive_layout(Room.from_toml(hall), 8).tolist())
+    args = ["evaluate", "--layout", str(layout), "--room", str(hall), "--system", "recommended"]
+    args += ["--realizations", "1", "--no-progress", "--out", str(tmp_path / "run")]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    data = json.loads((tmp_path / "run" / "evaluation.json").read_text())
+    assert data["stats"]["availability"] == 0
+    assert "no fix at any node in any realization (availability 0 %)" in text
+    assert "nan" not in text.split("realizations:\n")[1]

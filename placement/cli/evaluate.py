@@ -89,10 +89,14 @@ def run(args) -> int:
     # what the tags see first (and a robust system's verified share), then sigma
     robust = system.positioning.method == "robust"
     verified = f"  verified {percent(ev.verified)} %" if robust else ""
-    print(
-        f"  median {st['median']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}{verified}  "
-        f"std {st['std']:.4f}  rms {st['rms']:.4f}  max {st['max']:.4f}" + availability_note(st)
-    )
+    if st["availability"] == 0:  # no fix to describe: no figure rather than nan
+        print("  no fix at any node in any realization (availability 0 %)")
+    else:
+        print(
+            f"  median {st['median']:.4f}  mean {st['mean']:.4f}  P95 {st['p95']:.4f}{verified}"
+            f"  std {st['std']:.4f}  rms {st['rms']:.4f}  max {st['max']:.4f}"
+            + availability_note(st)
+        )
     if ev.geometry != "3d":
         print(f"  the anchors are {ev.geometry}: positions may be ambiguous (see anchor_geometry)")
     if ev.n_unconverged:
