@@ -61,7 +61,12 @@ schemes (Casas et al., 2006):
    :data:`LOOSE` of its distance from the fix, the nearest first, joins it when the fix on
    the larger set still passes the test with no contradiction (a dropping step or the
    tight refinement can leave out a direct range that mounting error put a few
-   centimetres off); the growing stops after :data:`GROW_TRIES` refusals;
+   centimetres off); the growing stops after :data:`GROW_TRIES` refusals; a fix on 4
+   anchors that the room's bounds hold at its boundary is then moved to the interior
+   candidate that fits its ranges best, within :data:`INTERIOR` and no more contradicted
+   (:func:`_off_the_boundary`): a tag close to its 4 anchors' plane fits its mirror image
+   across that plane about as well, and least squares started on the image's side runs
+   into the wall and stops there;
 6. the fix is the least-squares position on the anchors kept.
 
 A fix's contradictions are its ranges shorter than their distance by more than
@@ -109,6 +114,7 @@ from simulation.least_squares import (
     fill,
     flatness,
     gram_gradient,
+    inside_floor_plan,
     into_floor_plan,
     lm_solve,
     lm_solve_inline,
@@ -193,6 +199,10 @@ MISS_PENALTY = 6.4
 #: what a fix held at the room's boundary adds to its T in the ranking of minimal sets: the
 #: χ² quantile of one degree of freedom at 10⁻³ (a tag is not at the walls, a mirror image is)
 HELD_PENALTY = 10.8
+#: (m, range σs): the largest RMS range residual of a fix on 4 anchors moved off the room's
+#: boundary by step 5's end (:func:`_off_the_boundary`): the larger of the two; anchors are
+#: mounted within centimetres of the plan
+INTERIOR = (0.02, 2.0)
 #: the iterations of one dropping step's or one refinement's solve: from a good start a
 #: consistent set converges in a few; one that does not is not consistent
 SUBSET_ITER = 30
@@ -307,6 +317,10 @@ def robust_rows(
         T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
                             xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, gr,
                             trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 3 here)
+        if bounded and n == 4 and _held(x, lo[b], hi[b], poly):
+            T, iters = _off_the_boundary(ab, R[b], x, T, iters, lo[b], hi[b], poly, drop_iter,
+                                         xtol, ftol, gtol, sigma, loose, short, used[b], work,
+                                         gr, trial, xt, xb, fst)  # fmt: skip  # step 5's end
         status[b] = fst[0]
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
@@ -445,6 +459,95 @@ def _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
         else:
             refused += 1
     return T, n, iters
+
+
+@numba.njit(cache=True)
+def _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, max_iter, xtol, ftol, gtol, sigma,
+                      loose, short, used, work, geo, trial, xt, xf, fst):  # fmt: skip
+    # pragma: no cover - compiled
+    """The end of step 5 of the module docstring, in place on a fix x (3,) on the 4 anchors
+    ``used`` (M,) that the bounds hold at the room's boundary (box [lo, hi], floor plan
+    ``poly``). Where a tag lies close to the plane of its 4 anchors, its ranges fit two
+    mirror images across that plane about equally; least squares started on the wrong side
+    runs into the wall and stops there, metres of misfit away from neither. The
+    candidates: the fit without bounds (xf (3,)) where it ends strictly inside the room,
+    and the bounded fits started from the mirror images of that fit and of x across the
+    anchors' best-fit plane that end strictly inside (:func:`_inside`). The one with the
+    smallest misfit replaces x when its RMS range residual is within :data:`INTERIOR` and
+    no more contradicts it than x (:func:`_contradictions`) (``trial`` (M,), ``xt`` (3,):
+    scratch; the status of its solve into fst (1,)). Returns (T, iterations)."""
+    M = rho0.shape[0]
+    for j in range(M):
+        trial[j] = rho0[j] if used[j] else np.nan
+    now = _contradictions(ab, rho0, trial, x, short, loose, geo, INFINITE)
+    tol = max(INTERIOR[0], INTERIOR[1] * sigma)
+    best_c, best_st, best = 2.0 * tol * tol, 0, np.empty(3)  # ½Σr² of 4 ranges at RMS tol
+    found = False
+    put(xf, x)
+    c, st, it = lm_solve(ab, trial, xf, lo, hi, False, poly, max_iter, xtol, ftol, gtol, *work)
+    iters += it
+    if c <= best_c and _inside(xf, lo, hi, poly) and _contradictions(
+            ab, rho0, trial, xf, short, loose, geo, now) <= now:  # fmt: skip
+        best_c, best_st, found = c, st, True
+        put(best, xf)
+    centre, normal = _best_plane(ab, used)
+    for start in (xf, x):
+        _reflect(start, centre, normal, xt)
+        _outside(xt, lo, hi, poly)
+        c, st, it = lm_solve(ab, trial, xt, lo, hi, True, poly, max_iter, xtol, ftol, gtol,
+                             *work)  # fmt: skip
+        iters += it
+        if c < best_c and _inside(xt, lo, hi, poly) and _contradictions(
+                ab, rho0, trial, xt, short, loose, geo, now) <= now:  # fmt: skip
+            best_c, best_st, found = c, st, True
+            put(best, xt)
+    if not found:
+        return T, iters
+    put(x, best)
+    fst[0] = best_st
+    return 2.0 * best_c / (sigma * sigma), iters
+
+
+@numba.njit(cache=True)
+def _best_plane(ab, used):  # pragma: no cover - compiled
+    """(centroid (3,), unit normal (3,)) of the plane that fits the anchors ``used`` (M,)
+    of ab (M, 3) best in least squares: the normal is the eigenvector of the smallest
+    eigenvalue of their scatter matrix."""
+    n, centre = 0, np.zeros(3)
+    for j in range(ab.shape[0]):
+        if used[j]:
+            n += 1
+            centre += ab[j]
+    centre /= n
+    scatter = np.zeros((3, 3))
+    for j in range(ab.shape[0]):
+        if used[j]:
+            d = ab[j] - centre
+            scatter += np.outer(d, d)
+    return centre, np.linalg.eigh(scatter)[1][:, 0].copy()
+
+
+@numba.njit(cache=True, inline="always")
+def _reflect(p, centre, normal, out) -> None:  # pragma: no cover - compiled
+    """out (3,): the mirror image of p (3,) across the plane through ``centre`` (3,) with
+    the unit ``normal`` (3,)."""
+    d = 2.0 * ((p[0] - centre[0]) * normal[0] + (p[1] - centre[1]) * normal[1]
+               + (p[2] - centre[2]) * normal[2])  # fmt: skip
+    for k in range(3):
+        out[k] = p[k] - d * normal[k]
+
+
+@numba.njit(**NO_REFCOUNT)
+def _inside(x, lo, hi, poly) -> bool:  # pragma: no cover - compiled
+    """Whether x (3,) lies strictly inside the box [lo, hi] and the floor plan ``poly``
+    (K, 2) (none with K = 0): farther than :data:`HELD` from their boundaries."""
+    for k in range(3):
+        if not (x[k] - lo[k] > HELD and hi[k] - x[k] > HELD):
+            return False
+    if poly.shape[0] < 3:
+        return True
+    return inside_floor_plan(x[0], x[1], poly) and nearest_on_boundary(
+        x[0], x[1], poly)[0] > HELD * HELD  # fmt: skip
 
 
 @numba.njit(**NO_REFCOUNT)

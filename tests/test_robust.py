@@ -882,3 +882,75 @@ def test_a_position_beside_a_wall_is_surely_seen_by_the_anchors_that_see_it():
     assert surely == seen.tolist() and sum(surely) == 6
     inside = np.array([0.5, 4.544, 1.918])  # away from the wall: all seven points tested
     assert sees_near(geo, inside, L_LAB_PLAN[3], front[3], 0.05, True)
+
+
+#: 4 anchors close to the plane y = 0.15 (a wall's), the south wall at y = 0, and a tag
+#: 0.45 m in front of them: its mirror image across their plane lies beyond the wall
+NEAR_WALL = np.array([[1.0, 0.12, 2.8], [5.0, 0.22, 2.9], [2.0, 0.15, 0.5], [4.5, 0.1, 1.2]])
+NEAR_WALL_TAG = np.array([3.0, 0.6, 1.5])
+NEAR_WALL_BOX = (np.zeros(3), np.array([6.0, 4.0, 3.0]))
+
+
+@pytest.mark.parametrize("start", [[3.0, -0.3, 1.5], [3.0, 0.01, 1.5], [3.0, 0.3, 1.5]])
+def test_a_fix_on_four_anchors_held_at_the_wall_is_moved_to_its_interior_image(start):
+    """A tag near the plane of its 4 anchors: its ranges fit it and its mirror image
+    across that plane, which lies beyond the south wall. Least squares kept in the room
+    and started on the wrong side runs into the wall and stops there, 0.6 m off; the
+    robust fix, on the same 4 ranges from the same start, is moved to the interior image:
+    the tag (unverified: 4 anchors)."""
+    ranges = np.linalg.norm(NEAR_WALL - NEAR_WALL_TAG, axis=1)
+    kw = {"region": NEAR_WALL_BOX, "bounded": True, "x0": np.array(start), "full_output": True}
+    ls = locate(NEAR_WALL, ranges, **kw)
+    fix = locate(NEAR_WALL, ranges, method="robust", **kw)
+    if start[1] < 0.15:  # behind the anchors' plane: least squares stops on the wall
+        assert ls.x[1] == pytest.approx(0.0, abs=1e-9)
+        assert np.linalg.norm(ls.x - NEAR_WALL_TAG) > 0.5
+    assert np.linalg.norm(fix.x - NEAR_WALL_TAG) < 1e-6
+    assert fix.quality == UNVERIFIED and fix.used.all()
+
+
+def test_a_fix_held_at_the_wall_stays_where_no_interior_image_fits_its_ranges():
+    """The same 4 anchors with the ranges of the tag's mirror image in the wall (0.6 m
+    beyond it): the best point in the room fits them to 2.8 cm RMS (0.88 m from the wall;
+    the anchors are not quite coplanar), more than the 2 cm a fix moved off the wall may
+    miss, so the fix stays on the wall where least squares puts it."""
+    beyond = NEAR_WALL_TAG * [1, -1, 1]
+    ranges = np.linalg.norm(NEAR_WALL - beyond, axis=1)
+    kw = {"region": NEAR_WALL_BOX, "bounded": True, "x0": np.array([3.0, -0.3, 1.5]),
+          "full_output": True}  # fmt: skip
+    ls = locate(NEAR_WALL, ranges, **kw)
+    fix = locate(NEAR_WALL, ranges, method="robust", **kw)
+    assert ls.x[1] == pytest.approx(0.0, abs=1e-9)
+    np.testing.assert_allclose(fix.x, ls.x, atol=1e-9)
+
+
+#: the committed L-lab plan of the recommended system (anchors 2–5 near the south wall,
+#: nearly in one plane) and three field-check tags of its draws (seed 9) by that wall that
+#: see only anchors 2–5, with their ranges (anchors mounted within 3 cm)
+SOUTH_WALL_PLAN = np.array(
+    [[0.03, 3.594, 0.3975], [1.1867, 3.198, 2.97], [1.0011, 0.03, 0.765], [6.3844, 0.822, 2.97],
+     [5.1422, 0.03, 0.4975], [5.1422, 0.526, 2.97], [6.97, 2.235, 0.8325], [0.03, 4.386, 2.135]]
+)  # fmt: skip
+SOUTH_WALL_FIELD = (
+    ([3.438, 0.48, 0.866], [5.3343, 5.7604, 2.489, 3.6618, 1.7906, 2.7038, 4.4622, 6.0792]),
+    ([3.159, 0.458, 1.555], [5.2537, 4.3906, 2.3511, 3.5687, 2.2759, 2.4299, 4.7272, 5.7962]),
+    ([3.09, 0.589, 1.599], [5.3253, 4.4569, 2.326, 3.6045, 2.3762, 2.4621, 4.8651, 5.8607]),
+)
+
+
+def test_field_tags_by_the_l_labs_south_wall_are_fixed_off_the_wall():
+    """Each tag is about half a metre from the south wall and sees anchors 2–5 only. Their
+    4 ranges fit the tag and a point beyond the wall; least squares from the first fit
+    stopped on the wall, 0.47–0.60 m off, and the fix on those 4 anchors is now moved to
+    the interior image."""
+    from simulation import System
+
+    room = Room.from_toml(Path(__file__).resolve().parents[1] / "examples/l-shaped-lab.toml")
+    tags = np.array([t for t, _ in SOUTH_WALL_FIELD])
+    ranges = np.array([r for _, r in SOUTH_WALL_FIELD])
+    fix = System.recommended().positioning.locate(room, SOUTH_WALL_PLAN, ranges,
+                                                  full_output=True)  # fmt: skip
+    assert np.all(np.linalg.norm(fix.x - tags, axis=1) < 0.03)
+    assert np.all(fix.x[:, 1] > 0.3)
+    assert [np.flatnonzero(u).tolist() for u in fix.used] == [[2, 3, 4, 5]] * 3
+    assert np.all(fix.quality == UNVERIFIED)
