@@ -469,13 +469,13 @@ def _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, max_iter, xtol, ftol,
     ``used`` (M,) that the bounds hold at the room's boundary (box [lo, hi], floor plan
     ``poly``). Where a tag lies close to the plane of its 4 anchors, its ranges fit two
     mirror images across that plane about equally; least squares started on the wrong side
-    runs into the wall and stops there, metres of misfit away from neither. The
-    candidates: the fit without bounds (xf (3,)) where it ends strictly inside the room,
-    and the bounded fits started from the mirror images of that fit and of x across the
-    anchors' best-fit plane that end strictly inside (:func:`_inside`). The one with the
-    smallest misfit replaces x when its RMS range residual is within :data:`INTERIOR` and
-    no more contradicts it than x (:func:`_contradictions`) (``trial`` (M,), ``xt`` (3,):
-    scratch; the status of its solve into fst (1,)). Returns (T, iterations)."""
+    runs into the wall and stops there, fitting neither. The candidates: the fit without
+    bounds (into xf (3,)) where it ends strictly inside the room, and the bounded fits
+    started from the mirror images of that fit and of x across the anchors' best-fitting
+    plane that end strictly inside (:func:`_inside`). The one with the smallest misfit
+    replaces x when its RMS range residual is within :data:`INTERIOR` and nothing
+    contradicts it more than x (:func:`_contradictions`); the status of its solve goes
+    into fst (1,) (``trial`` (M,), ``xt`` (3,): scratch). Returns (T, iterations)."""
     M = rho0.shape[0]
     for j in range(M):
         trial[j] = rho0[j] if used[j] else np.nan
