@@ -20,7 +20,7 @@ import numpy as np
 
 from analysis.coverage import covered_share
 from analysis.fim import peb
-from analysis.percent import percent
+from analysis.percent import percent_cell
 from analysis.report_data import EVALUATION_FILE, RESULT_FILE, Context, LayoutEntry
 from simulation.room import SURFACES, Room
 from simulation.statistics import error_stats, penalty_text
@@ -82,10 +82,8 @@ def _num(x: Any, digits: int = 3) -> str:
 
 
 def _percent(x: Any) -> str:
-    """A share as a percentage ("–" when unknown)."""
-    if x is None or not isinstance(x, int | float) or math.isnan(x):
-        return "–"
-    return "100 %" if x >= 1 else f"{percent(x, 2)} %"
+    """A share as a percentage ("–" when unknown, "100 %" for all)."""
+    return percent_cell(x, whole="100 %")
 
 
 def _table(header: list[str], rows: list[list[str]], left: int = 1, cls: str = "") -> str:

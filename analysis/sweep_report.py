@@ -11,16 +11,12 @@ from pathlib import Path
 
 from analysis.figures import png_bytes, sweep_curves
 from analysis.paper import TABLE1
-from analysis.percent import percent
+from analysis.percent import percent_cell
 from simulation.output import write_file
 
 
 def _num(v) -> str:
     return "–" if v is None or v != v else f"{v:.3f}"
-
-
-def _share(v) -> str:
-    return "–" if v is None or v != v else f"{percent(v, 2)} %"
 
 
 def sweep_html(data: dict, dpi: float = 100) -> str:
@@ -60,7 +56,7 @@ def sweep_html(data: dict, dpi: float = 100) -> str:
             f"<td>{' / '.join(_num(r.get(k)) for k in ('field_median', 'field_mean', 'field_p95'))}"
             f"</td><td>{_num(r.get('field_std'))}</td>"
             f"<td>{_num(r['std'])}</td><td>{_num(r['mean'])}</td>"
-            f"<td>{_num(r['p95'])}</td><td>{_share(r.get('availability'))}</td>"
+            f"<td>{_num(r['p95'])}</td><td>{percent_cell(r.get('availability'))}</td>"
             f"<td>{_num(r['held_out_std'])}</td>"
             f"<td>{_num(r['mounting_std'])}</td><td>{r['seconds']:.0f}</td>{ref}</tr>"
         )

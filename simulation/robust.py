@@ -284,7 +284,6 @@ def robust_rows(
     x, xt, xb = np.empty(3), np.empty(3), np.empty(3)
     score = np.empty(M)
     fst = np.zeros(1, dtype=np.int64)  # the status of the solve that gave the fix
-    drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
     loose, short = max(LOOSE[0], LOOSE[1] * sigma), max(SHORT[0], SHORT[1] * sigma)
     for b in range(R.shape[0]):
         if status[b] < 0:
@@ -299,34 +298,51 @@ def robust_rows(
             used[b, j] = F[b, j] == F[b, j]
         put(x, xs[b])
         fst[0] = status[b]
-        T, n, iters = _drop_failing(ab, rho, x, 2.0 * costs[b] / (sigma * sigma), nit[b],
-                                    lo[b], hi[b], bounded, poly, drop_iter, xtol, ftol, gtol,
-                                    sigma, thr, used[b], work, score, trial, xt, xb,
-                                    fst)  # fmt: skip  # step 3
-        clean = T <= thr[n - 3] and n >= 5
-        if clean and _contradictions(ab, R[b], rho, x, short, loose, gr, 0) > 0:
-            clean, T, n, iters = _drop_hidden(ab, R[b], rho, x, T, n, iters, lo[b], hi[b],
-                                              bounded, poly, drop_iter, xtol, ftol, gtol, sigma,
-                                              thr, loose, short, used[b], work, gr, trial, xt,
-                                              fst)  # fmt: skip  # step 3's end
-        if not clean:
-            T, n, iters = _consensus(
-                ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, max_iter, xtol, ftol,
-                gtol, sigma, thr, loose, short, used[b], work, gr, fst,
-            )  # fmt: skip  # step 4
-        T, n, iters = _grow(ab, R[b], x, T, n, iters, lo[b], hi[b], bounded, poly, drop_iter,
-                            xtol, ftol, gtol, sigma, thr, loose, short, used[b], work, gr,
-                            trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 3 here)
-        if bounded and n == 4 and _held(x, lo[b], hi[b], poly):
-            T, iters = _off_the_boundary(ab, R[b], x, T, iters, lo[b], hi[b], poly, drop_iter,
-                                         xtol, ftol, gtol, sigma, loose, short, used[b], work,
-                                         gr, trial, xt, xb, fst)  # fmt: skip  # step 5's end
+        T, n, iters = _one_fix(ab, R[b], rho, x, 2.0 * costs[b] / (sigma * sigma), nit[b],
+                               lo[b], hi[b], bounded, poly, max_iter, xtol, ftol, gtol, sigma,
+                               thr, loose, short, used[b], work, gr, score, trial, xt, xb,
+                               fst)  # fmt: skip
         status[b] = fst[0]
         xs[b] = x
         costs[b] = 0.5 * T * sigma * sigma
         nit[b] = iters
         quality[b] = _quality(ab, R[b], used[b], x, T, n, thr, sigma * bias[n - 3], alert,
                               rho, work)  # fmt: skip
+
+
+@numba.njit(cache=True)
+def _one_fix(ab, rho0, rho, x, T, iters, lo, hi, bounded, poly, max_iter, xtol, ftol, gtol,
+             sigma, thr, loose, short, used, work, geo, score, trial, xt, xb,
+             fst):  # fmt: skip  # pragma: no cover - compiled
+    """Steps 3–5 of the module docstring for one row: the heard ranges rho0 (M,) of anchors
+    ab (M, 3), the ranges of its first fit in rho (M,) (rho0 without its proved echoes;
+    NaN: left out, as ``used`` (M,) is False), that fit in x (3,) with its normalized
+    residual T and iterations; in place on x, rho and used, the status of the solve that
+    gave the fix into fst (1,) (``geo`` the row's map, :func:`row_map`; ``work``,
+    ``score``, ``trial``, ``xt``, ``xb``: scratch). Returns (T, n, iterations) of the fix."""
+    drop_iter = min(max_iter, SUBSET_ITER)  # from a converged fix: few when consistent
+    T, n, iters = _drop_failing(ab, rho, x, T, iters, lo, hi, bounded, poly, drop_iter, xtol,
+                                ftol, gtol, sigma, thr, used, work, score, trial, xt, xb,
+                                fst)  # fmt: skip  # step 3
+    clean = T <= thr[n - 3] and n >= 5
+    if clean and _contradictions(ab, rho0, rho, x, short, loose, geo, 0) > 0:
+        clean, T, n, iters = _drop_hidden(ab, rho0, rho, x, T, n, iters, lo, hi,
+                                          bounded, poly, drop_iter, xtol, ftol, gtol, sigma,
+                                          thr, loose, short, used, work, geo, trial, xt,
+                                          fst)  # fmt: skip  # step 3's end
+    if not clean:
+        T, n, iters = _consensus(
+            ab, rho0, x, T, n, iters, lo, hi, bounded, poly, max_iter, xtol, ftol,
+            gtol, sigma, thr, loose, short, used, work, geo, fst,
+        )  # fmt: skip  # step 4
+    T, n, iters = _grow(ab, rho0, x, T, n, iters, lo, hi, bounded, poly, drop_iter,
+                        xtol, ftol, gtol, sigma, thr, loose, short, used, work, geo,
+                        trial, xt, score, fst)  # fmt: skip  # step 5 (n ≥ 3 here)
+    if bounded and n == 4 and _held(x, lo, hi, poly):
+        T, iters = _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, drop_iter,
+                                     xtol, ftol, gtol, sigma, loose, short, used, work,
+                                     geo, trial, xt, xb, fst)  # fmt: skip  # step 5's end
+    return T, n, iters
 
 
 @numba.njit(cache=True)
@@ -486,8 +502,7 @@ def _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, max_iter, xtol, ftol,
     put(xf, x)
     c, st, it = lm_solve(ab, trial, xf, lo, hi, False, poly, max_iter, xtol, ftol, gtol, *work)
     iters += it
-    if c <= best_c and _inside(xf, lo, hi, poly) and _contradictions(
-            ab, rho0, trial, xf, short, loose, geo, now) <= now:  # fmt: skip
+    if c <= best_c and _admissible(ab, rho0, trial, xf, now, short, loose, geo, lo, hi, poly):
         best_c, best_st, found = c, st, True
         put(best, xf)
     centre, normal = _best_plane(ab, used)
@@ -497,8 +512,8 @@ def _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, max_iter, xtol, ftol,
         c, st, it = lm_solve(ab, trial, xt, lo, hi, True, poly, max_iter, xtol, ftol, gtol,
                              *work)  # fmt: skip
         iters += it
-        if c < best_c and _inside(xt, lo, hi, poly) and _contradictions(
-                ab, rho0, trial, xt, short, loose, geo, now) <= now:  # fmt: skip
+        if c < best_c and _admissible(ab, rho0, trial, xt, now, short, loose, geo, lo, hi,
+                                      poly):  # fmt: skip
             best_c, best_st, found = c, st, True
             put(best, xt)
     if not found:
@@ -506,6 +521,16 @@ def _off_the_boundary(ab, rho0, x, T, iters, lo, hi, poly, max_iter, xtol, ftol,
     put(x, best)
     fst[0] = best_st
     return 2.0 * best_c / (sigma * sigma), iters
+
+
+@numba.njit(**NO_REFCOUNT)
+def _admissible(ab, rho0, kept, p, now, short, loose, geo, lo, hi, poly) -> bool:
+    # pragma: no cover - compiled
+    """Whether the candidate p (3,) of :func:`_off_the_boundary` (on the ranges kept (M,))
+    lies strictly inside the room (:func:`_inside`) and nothing contradicts it more than
+    the ``now`` contradictions of the fix it would replace (:func:`_contradictions`)."""
+    return _inside(p, lo, hi, poly) and _contradictions(ab, rho0, kept, p, short, loose, geo,
+                                                        now) <= now  # fmt: skip
 
 
 @numba.njit(cache=True)

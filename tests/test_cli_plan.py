@@ -128,3 +128,12 @@ def test_a_share_short_of_all_never_reads_100_percent():
         availability_note({"availability": 0.992})
         == ", availability 99.20 % (0.80 % without a fix)"
     )
+
+
+def test_a_reports_share_cell_says_unknown_all_and_short_of_all_apart():
+    from analysis.percent import percent_cell
+
+    assert percent_cell(None) == percent_cell(float("nan")) == percent_cell("x") == "–"
+    assert percent_cell(1.0) == "100.00 %" and percent_cell(1.0, whole="100 %") == "100 %"
+    assert percent_cell(1 - 1e-5, whole="100 %") == "99.999 %"
+    assert percent_cell(0.25) == "25.00 %"
